@@ -1,0 +1,36 @@
+"""The one place that probes optional dependencies."""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+from types import ModuleType
+
+from .errors import DependencyNotInstalled
+
+# module name -> extra that installs it
+EXTRAS = {
+    "nevergrad": "nevergrad",
+    "mujoco": "mujoco",
+    "av": "video",
+    "decord": "video",
+    "hypothesis": "dev",
+}
+
+
+def is_available(module: str) -> bool:
+    """True when ``module`` can be imported (without importing it)."""
+    return importlib.util.find_spec(module) is not None
+
+
+def require(module: str, extra: str | None = None, purpose: str = "") -> ModuleType:
+    """Import ``module`` or raise :class:`DependencyNotInstalled` with the pip command."""
+    try:
+        return importlib.import_module(module)
+    except ImportError as exc:
+        extra = extra or EXTRAS.get(module)
+        target = f'"stable-worldmodel[{extra}]"' if extra else module
+        why = f" for {purpose}" if purpose else ""
+        raise DependencyNotInstalled(
+            f"{module!r} is required{why} but is not installed. Install it with: pip install {target}"
+        ) from exc

@@ -1,0 +1,113 @@
+"""The environment registry: every ``swm/...`` id, its entry point, tags and expert.
+
+Entry points are strings, so registering imports nothing heavy. Adding an env family
+is one line in :data:`BUILTIN` (or a call to :func:`register_env` from user code).
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..errors import unknown_name
+
+
+@dataclass(frozen=True)
+class EnvEntry:
+    """What the registry knows about one environment id."""
+
+    env_id: str
+    entry_point: str
+    tags: tuple[str, ...] = ()
+    expert: str | None = None  # "module:Class" of a batched expert policy
+    kwargs: dict[str, Any] = field(default_factory=dict)
+    max_episode_steps: int | None = None
+
+
+_ENTRIES: dict[str, EnvEntry] = {}
+
+_P = "stable_worldmodel.envs"
+BUILTIN: tuple[EnvEntry, ...] = (
+    EnvEntry("swm/Toy-v0", f"{_P}.toy.env:ToyEnv", ("toy", "continuous"), f"{_P}.toy.env:ToyExpert"),
+    EnvEntry("swm/PushT-v1", f"{_P}.pusht.env:PushT", ("paper", "continuous", "pymunk"), f"{_P}.pusht.expert:PushTExpert"),
+    EnvEntry(
+        "swm/PushT-Discrete-v1",
+        f"{_P}.pusht.env:PushTDiscrete",
+        ("discrete", "pymunk"),
+        f"{_P}.pusht.expert:PushTDiscreteExpert",
+    ),
+    EnvEntry("swm/TwoRoom-v1", f"{_P}.two_room.env:TwoRoomEnv", ("paper", "continuous"), f"{_P}.two_room.expert:TwoRoomExpert"),
+    EnvEntry(
+        "swm/SimplePointMaze-v0",
+        f"{_P}.simple_point_maze.env:SimplePointMazeEnv",
+        ("continuous",),
+        f"{_P}.simple_point_maze.expert:SimplePointMazeExpert",
+    ),
+    EnvEntry(
+        "swm/ImagePositioning-v1",
+        f"{_P}.image_positioning.env:ImagePositioningEnv",
+        ("continuous",),
+        f"{_P}.image_positioning.expert:ImagePositioningExpert",
+    ),
+    EnvEntry("swm/VoidRun-v0", f"{_P}.voidrun.env:VoidRunEnv", ("discrete",), f"{_P}.voidrun.expert:VoidRunExpert"),
+)
+
+
+def register_env(
+    env_id: str,
+    entry_point: str,
+    *,
+    tags: tuple[str, ...] = (),
+    expert: str | None = None,
+    kwargs: dict[str, Any] | None = None,
+    max_episode_steps: int | None = None,
+) -> None:
+    """Register ``env_id`` with Gymnasium and with our registry (idempotent)."""
+    import gymnasium as gym
+
+    entry = EnvEntry(env_id, entry_point, tuple(tags), expert, dict(kwargs or {}), max_episode_steps)
+    _ENTRIES[env_id] = entry
+    if env_id not in gym.registry:
+        gym.register(id=env_id, entry_point=entry_point, kwargs=entry.kwargs, max_episode_steps=max_episode_steps)
+
+
+def register_all() -> None:
+    for entry in BUILTIN:
+        register_env(
+            entry.env_id,
+            entry.entry_point,
+            tags=entry.tags,
+            expert=entry.expert,
+            kwargs=entry.kwargs,
+            max_episode_steps=entry.max_episode_steps,
+        )
+
+
+def list_envs(tag: str | None = None) -> list[str]:
+    """Registered ``swm/...`` ids, optionally only those carrying ``tag``."""
+    return sorted(e.env_id for e in _ENTRIES.values() if tag is None or tag in e.tags)
+
+
+def get_entry(env_id: str) -> EnvEntry:
+    """The registry entry of ``env_id``; unknown ids raise with a suggestion."""
+    if env_id in _ENTRIES:
+        return _ENTRIES[env_id]
+    import gymnasium as gym
+
+    if env_id in gym.registry:  # registered by someone else: still usable
+        spec = gym.registry[env_id]
+        ep = spec.entry_point if isinstance(spec.entry_point, str) else ""
+        return EnvEntry(env_id, ep, (), None, dict(spec.kwargs), spec.max_episode_steps)
+    raise unknown_name("environment id", env_id, list(_ENTRIES) + list(gym.registry))
+
+
+def check_env_id(env_id: str) -> None:
+    """Raise :class:`~stable_worldmodel.errors.UnknownNameError` when ``env_id`` is not registered."""
+    get_entry(env_id)
+
+
+def load_object(path: str) -> Any:
+    """Import ``"package.module:Name"`` and return the attribute."""
+    module, _, name = path.partition(":")
+    return getattr(importlib.import_module(module), name)

@@ -1,0 +1,114 @@
+"""Protocols every ``swm`` environment may implement, and the helpers they share.
+
+World and the wrappers check these with ``isinstance`` (they are
+``runtime_checkable``), never with ``hasattr`` on private names.
+
+Reset options understood by every built-in env::
+
+    {"variation": ["agent.color", ...] | ["all"],      # factors to resample
+     "variation_values": {"agent.color": [255, 0, 0]},  # factors to set (dotted or nested)
+     "state": np.ndarray,                               # start from this full state
+     "goal_state": np.ndarray}                          # use this goal state
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+from .. import keys
+from ..errors import ConfigError, unknown_name
+
+
+@runtime_checkable
+class SupportsRenderSize(Protocol):
+    """An env that can draw directly at a requested size (no resize afterwards)."""
+
+    def set_render_size(self, size: tuple[int, int]) -> None:
+        """Make ``render()`` return frames of ``size`` = (H, W)."""
+
+
+@runtime_checkable
+class SupportsDatasetReset(Protocol):
+    """An env that can start from a state (and goal) recorded in a dataset."""
+
+    def reset_options_from_dataset(
+        self, start_row: Mapping[str, np.ndarray], goal_row: Mapping[str, np.ndarray]
+    ) -> dict[str, Any]:
+        """Reset options that start at ``start_row``'s state with ``goal_row``'s state as goal."""
+
+
+@runtime_checkable
+class SupportsEvalState(Protocol):
+    """An env that can judge a state against a goal state."""
+
+    def eval_state(self, goal_state: np.ndarray, cur_state: np.ndarray) -> tuple[bool, float]:
+        """Return ``(success, distance)``."""
+
+
+class DatasetResetMixin:
+    """Default :class:`SupportsDatasetReset`: restore ``state``, ``goal_state`` and recorded variations."""
+
+    def reset_options_from_dataset(
+        self, start_row: Mapping[str, np.ndarray], goal_row: Mapping[str, np.ndarray]
+    ) -> dict[str, Any]:
+        if keys.STATE not in start_row:
+            raise ConfigError(
+                f"{type(self).__name__} requires a {keys.STATE!r} column to start from a dataset row, "
+                f"got columns {sorted(start_row)}"
+            )
+        options: dict[str, Any] = {
+            keys.STATE: np.asarray(start_row[keys.STATE]),
+            keys.GOAL_STATE: np.asarray(goal_row[keys.STATE]),
+        }
+        prefix = keys.VARIATION + "."
+        values = {k[len(prefix) :]: np.asarray(v) for k, v in start_row.items() if k.startswith(prefix)}
+        if values:
+            options[keys.VARIATION_VALUES] = values
+        return options
+
+
+def apply_variation_options(variation_space, options: Mapping[str, Any] | None, np_random: np.random.Generator):
+    """Reset ``variation_space`` to its defaults, then resample / set what ``options`` names.
+
+    The space is seeded from ``np_random`` so the same env seed gives the same factors.
+    Returns the (nested) value dict.
+    """
+    variation_space.reset()
+    if not options:
+        return variation_space.value
+    names = variation_space.names()
+    requested = options.get(keys.VARIATION)
+    if requested:
+        if isinstance(requested, str):
+            raise ConfigError(
+                f"reset option 'variation' requires a list of factor names, got the string {requested!r}; "
+                f"write [{requested!r}]"
+            )
+        requested = list(requested)
+        for name in requested:
+            if name != "all" and name not in names and not any(n.startswith(name + ".") for n in names):
+                raise unknown_name("variation factor", name, ["all", *names])
+        variation_space.seed(int(np_random.integers(0, 2**31 - 1)))
+        variation_space.update(set(requested))
+    values = options.get(keys.VARIATION_VALUES)
+    if values:
+        flat = _flatten(values)
+        for name in flat:
+            if name not in names:
+                raise unknown_name("variation factor", name, names)
+        variation_space.set_value(flat)
+    return variation_space.value
+
+
+def _flatten(d: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for k, v in d.items():
+        path = f"{prefix}{k}"
+        if isinstance(v, Mapping):
+            out.update(_flatten(v, path + "."))
+        else:
+            out[path] = v
+    return out

@@ -1,0 +1,66 @@
+"""Exceptions raised by stable_worldmodel.
+
+Every user-facing error derives from :class:`SWMError` and also from the builtin it
+refines, so ``except KeyError`` / ``except ValueError`` keep working in user code.
+"""
+
+from __future__ import annotations
+
+import difflib
+from collections.abc import Iterable
+
+__all__ = [
+    "SWMError",
+    "UnknownNameError",
+    "ConfigError",
+    "SpaceError",
+    "DependencyNotInstalled",
+    "DatasetFormatError",
+    "did_you_mean",
+]
+
+
+class SWMError(Exception):
+    """Base class of all stable_worldmodel errors."""
+
+
+class UnknownNameError(SWMError, KeyError):
+    """A name (env id, solver, dataset, key, ...) that is not registered."""
+
+    def __str__(self) -> str:  # KeyError quotes its message; we want plain text
+        return str(self.args[0]) if self.args else ""
+
+
+class ConfigError(SWMError, ValueError):
+    """An argument or configuration value that cannot be accepted."""
+
+
+class SpaceError(SWMError, ValueError):
+    """A value, shape or dtype that does not fit a space."""
+
+
+class DependencyNotInstalled(SWMError, ImportError):
+    """An optional dependency is missing; the message gives the pip command."""
+
+
+class DatasetFormatError(SWMError, ValueError):
+    """A dataset file that does not have the expected layout."""
+
+
+def did_you_mean(name: str, candidates: Iterable[str], n: int = 3) -> str:
+    """Return a ``" Did you mean 'x'?"`` suffix, or ``""`` when nothing is close."""
+    candidates = [str(c) for c in candidates]
+    close = difflib.get_close_matches(str(name), candidates, n=n, cutoff=0.5)
+    if not close:
+        return ""
+    if len(close) == 1:
+        return f" Did you mean {close[0]!r}?"
+    return " Did you mean one of " + ", ".join(repr(c) for c in close) + "?"
+
+
+def unknown_name(kind: str, name: str, candidates: Iterable[str]) -> UnknownNameError:
+    """Build an :class:`UnknownNameError` naming the bad value and the accepted ones."""
+    candidates = sorted(str(c) for c in candidates)
+    hint = did_you_mean(name, candidates)
+    shown = ", ".join(candidates[:20]) + (" ..." if len(candidates) > 20 else "")
+    return UnknownNameError(f"Unknown {kind} {name!r}.{hint} Accepted: {shown or '(none)'}")
