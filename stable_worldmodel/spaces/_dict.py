@@ -1,0 +1,354 @@
+"""``Dict``: a tree of stateful spaces with ordered sampling and dotted names."""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Iterable, Iterator, KeysView, Mapping
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from ..errors import SpaceError, did_you_mean, unknown_name
+from ._leaf import StatefulSpaceMixin, rejection_sample, short_repr
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["Dict"]
+
+# selection tree for partial resampling: key -> None (the whole subspace) or a nested selection
+_Selection = dict[str, "_Selection | None"]
+
+
+def _route(args: tuple, kwargs: dict, key: str) -> tuple[tuple, dict]:
+    """Per-key ``mask``/``probability`` when given as mappings (Gymnasium's Dict convention)."""
+    if not args and not kwargs:
+        return args, kwargs
+
+    def pick(v: Any) -> Any:
+        return v.get(key) if isinstance(v, Mapping) else v
+
+    return tuple(pick(a) for a in args), {n: pick(v) for n, v in kwargs.items()}
+
+
+class Dict(gym.spaces.Dict):
+    """A ``gymnasium.spaces.Dict`` of stateful spaces (leaves or nested ``Dict``).
+
+    - Keys keep insertion order (no sorting) and must be strings without ``"."``.
+    - ``sampling_order`` lists top-level keys to sample first (dependencies: sample the world
+      size before positions inside it); keys it omits are appended with one warning; unknown
+      keys raise SpaceError. Nested ``Dict`` spaces apply their own order.
+    - ``constrain_fn(value_dict) -> bool`` sees this Dict's complete nested value. While a
+      candidate is tested it is also the space's current value, so a function that reads
+      ``env.variation_space.value[...]`` at the top level sees the candidate too (prefer that
+      over ``space["a"].value``, as the seed documents). It is enforced by rejection sampling
+      in :meth:`sample` and :meth:`update`; a nested Dict's ``constrain_fn`` gets its own subtree.
+    - ``init_value`` (nested or dotted, partial allowed) overrides the leaves' defaults.
+
+    Example::
+
+        config = Dict(
+            {"difficulty": Discrete(n=3, init_value=0),
+             "world": Dict({"width": Discrete(n=100, init_value=50), "height": Discrete(n=100, init_value=50)}),
+             "player_pos": Box(low=np.array([0, 0]), high=np.array([99, 99]), init_value=np.array([25, 25]))},
+            sampling_order=["difficulty", "world", "player_pos"],
+        )
+        state = config.sample()          # nested dict, also stored as config.value
+        config.update({"world.width"})   # resample one factor, keep the others
+        config.names()                   # ['difficulty', 'world.width', 'world.height', 'player_pos']
+    """
+
+    def __init__(
+        self,
+        *args: Any,
+        init_value: Mapping[str, Any] | None = None,
+        constrain_fn: Callable[[dict], bool] | None = None,
+        sampling_order: Iterable[str] | None = None,
+        **kwargs: Any,
+    ):
+        kwargs.setdefault("sort_keys", False)
+        super().__init__(*args, **kwargs)
+        for key, space in self.spaces.items():
+            self._check_entry(key, space)
+        if constrain_fn is not None and not callable(constrain_fn):
+            raise SpaceError(f"Dict requires a callable constrain_fn, got {constrain_fn!r}")
+        self.constrain_fn = constrain_fn
+        self._order = self._resolve_order(sampling_order)
+        if init_value is not None:
+            self.set_init_value(init_value)
+            self.set_value(init_value)
+
+    # -- structure ------------------------------------------------------------------------------
+    @staticmethod
+    def _check_entry(key: Any, space: Any) -> None:
+        if not isinstance(key, str) or not key or "." in key:
+            raise SpaceError(f"Dict requires non-empty string keys without '.', got {key!r}")
+        if not isinstance(space, (StatefulSpaceMixin, Dict)):
+            raise SpaceError(
+                f"Dict requires stable_worldmodel spaces (Box, Discrete, MultiDiscrete, RGBBox, Dict) as values, "
+                f"got {type(space).__module__}.{type(space).__name__} for key {key!r}"
+            )
+
+    def _resolve_order(self, sampling_order: Iterable[str] | None) -> list[str]:
+        keys = list(self.spaces)
+        if sampling_order is None:
+            return keys
+        if isinstance(sampling_order, str):
+            raise SpaceError(f"Dict requires sampling_order as a list of keys, got the string {sampling_order!r}")
+        order = list(sampling_order)
+        for key in order:
+            if key not in self.spaces:
+                hint = did_you_mean(key, keys)
+                raise SpaceError(
+                    f"Dict requires sampling_order keys of this Dict, got {key!r}.{hint} "
+                    f"Keys: {keys}. Nested Dicts take their own sampling_order."
+                )
+        if len(set(order)) != len(order):
+            raise SpaceError(f"Dict requires sampling_order without repeated keys, got {order}")
+        missing = [k for k in keys if k not in order]
+        if missing:
+            logger.warning("Dict sampling_order does not name %s; sampling them last, in insertion order", missing)
+        return order + missing
+
+    def __getitem__(self, key: str) -> Any:
+        """The subspace at ``key``; dotted paths (``"agent.color"``) reach nested spaces."""
+        node = self._lookup(key)
+        if node is None:
+            raise unknown_name("space key", key, self._node_paths())
+        return node
+
+    def __setitem__(self, key: str, value: Any) -> None:
+        self._check_entry(key, value)
+        super().__setitem__(key, value)
+        if key not in self._order:
+            self._order.append(key)
+
+    def _lookup(self, path: Any) -> Any:
+        """The space at dotted ``path`` or None."""
+        if not isinstance(path, str):
+            return None
+        node: Any = self
+        for part in path.split("."):
+            if not isinstance(node, Dict) or part not in node.spaces:
+                return None
+            node = node.spaces[part]
+        return node
+
+    def _node_paths(self, prefix: str = "") -> Iterator[str]:
+        """Dotted paths of every node (nested Dicts and leaves)."""
+        for key, space in self.spaces.items():
+            yield prefix + key
+            if isinstance(space, Dict):
+                yield from space._node_paths(f"{prefix}{key}.")
+
+    def _leaves(self, ordered: bool = False, prefix: str = "") -> Iterator[tuple[str, StatefulSpaceMixin]]:
+        for key in self._order if ordered else self.spaces:
+            space = self.spaces[key]
+            if isinstance(space, Dict):
+                yield from space._leaves(ordered, f"{prefix}{key}.")
+            else:
+                yield prefix + key, space
+
+    def _unknown(self, what: str, path: Any) -> SpaceError:
+        candidates = list(self._node_paths())
+        return SpaceError(
+            f"Dict requires {what} naming a variable of this space, got {path!r}.{did_you_mean(str(path), candidates)}"
+            f" Known: {candidates}"
+        )
+
+    def names(self) -> list[str]:
+        """Dotted paths of all leaves, in insertion order (``"a.b"`` for key ``b`` of nested ``a``)."""
+        return [path for path, _ in self._leaves()]
+
+    @property
+    def sampling_order(self) -> KeysView[str]:
+        """Dotted leaf paths in sampling order.
+
+        An ordered, set-like view: supports ``in``, iteration in order, ``len`` and set operations.
+        """
+        return dict.fromkeys(path for path, _ in self._leaves(ordered=True)).keys()
+
+    # -- values -----------------------------------------------------------------------------------
+    @property
+    def value(self) -> dict[str, Any]:
+        """Nested dict of the current values."""
+        return {key: space.value for key, space in self.spaces.items()}
+
+    @value.setter
+    def value(self, v: Mapping[str, Any]) -> None:
+        self.set_value(v)
+
+    @property
+    def init_value(self) -> dict[str, Any]:
+        """Nested dict of the values :meth:`reset` restores."""
+        return {key: space.init_value for key, space in self.spaces.items()}
+
+    @init_value.setter
+    def init_value(self, v: Mapping[str, Any]) -> None:
+        self.set_init_value(v)
+
+    def set_value(self, v: Mapping[str, Any]) -> None:
+        """Set the named leaves (nested or dotted dict, partial allowed); the others keep their values.
+
+        All values are validated before any is written (SpaceError names the first bad one).
+        """
+        for leaf, val in self._resolve_values(v, "value"):
+            leaf._value = val
+
+    def set_init_value(self, v: Mapping[str, Any]) -> None:
+        """Like :meth:`set_value` for the values :meth:`reset` restores (current values unchanged)."""
+        for leaf, val in self._resolve_values(v, "init_value"):
+            leaf._init_value = val
+
+    def _resolve_values(self, v: Any, what: str) -> list[tuple[StatefulSpaceMixin, Any]]:
+        if not isinstance(v, Mapping):
+            raise SpaceError(f"Dict requires a (nested or dotted) dict as {what}, got {short_repr(v)}")
+        pending: list[tuple[StatefulSpaceMixin, Any]] = []
+        stack: list[tuple[str, Mapping]] = [("", v)]
+        while stack:
+            prefix, mapping = stack.pop()
+            for key, val in mapping.items():
+                path = f"{prefix}{key}"
+                node = self._lookup(path)
+                if node is None:
+                    raise self._unknown(f"{what} keys", path)
+                if isinstance(node, Dict):
+                    if not isinstance(val, Mapping):
+                        raise SpaceError(f"Dict requires a dict for nested space {path!r}, got {short_repr(val)}")
+                    stack.append((path + ".", val))
+                elif isinstance(val, Mapping):
+                    raise SpaceError(f"{node!r} requires an array-like {what} for {path!r}, got a dict")
+                else:
+                    pending.append((node, node._coerce(val, f"{what} for {path!r}")))
+        return pending
+
+    def reset(self) -> None:
+        """Reset every leaf to its ``init_value``."""
+        for space in self.spaces.values():
+            space.reset()
+
+    def seed(self, seed: int | dict | None = None) -> Any:
+        """Seed this space; an int seeds every subspace deterministically (numpy ints accepted)."""
+        return super().seed(int(seed) if isinstance(seed, np.integer) else seed)
+
+    # -- membership --------------------------------------------------------------------------------
+    def contains(self, x: Any) -> bool:
+        """True for a dict with exactly these keys whose values are in their subspaces and pass ``constrain_fn``."""
+        if not isinstance(x, Mapping) or set(x.keys()) != set(self.spaces):
+            return False
+        if not all(space.contains(x[key]) for key, space in self.spaces.items()):
+            return False
+        return self.constrain_fn is None or bool(self.constrain_fn(x))
+
+    def _failures(self, prefix: str = "") -> Iterator[str]:
+        for key, space in self.spaces.items():
+            if isinstance(space, Dict):
+                yield from space._failures(f"{prefix}{key}.")
+            elif not space.contains(space._value):
+                yield prefix + key
+        if self.constrain_fn is not None and not self.constrain_fn(self.value):
+            yield f"{prefix or '<root>'} (constrain_fn)"
+
+    def check(self, debug: bool = False) -> bool:
+        """True when every current value is valid; with ``debug`` logs which ones are not."""
+        failed = list(self._failures())
+        if failed and debug:
+            logger.warning("Dict.check: invalid current values at %s", failed)
+        return not failed
+
+    # -- sampling ----------------------------------------------------------------------------------
+    def sample(
+        self,
+        *args: Any,
+        max_tries: int = 1000,
+        warn_after_s: float | None = 5.0,
+        set_value: bool = True,
+        **kwargs: Any,
+    ) -> dict[str, Any]:
+        """Sample every subspace in sampling order until ``constrain_fn`` holds; returns the nested dict.
+
+        ``*args``/``**kwargs`` go to each subspace's ``sample`` (a mapping ``mask`` or
+        ``probability`` is split per key). Raises ``RuntimeError`` after ``max_tries`` rejections,
+        leaving all values as they were; ``set_value=False`` also restores them after sampling.
+        """
+        return self._resample(None, args, kwargs, max_tries, warn_after_s, set_value)
+
+    def update(self, keys: Iterable[str] | str) -> None:
+        """Resample only the variables named by ``keys`` (dotted paths), in sampling order.
+
+        A key naming a nested Dict resamples its whole subtree; ``"all"`` resamples everything.
+        Other leaves keep their values exactly. Unknown keys raise SpaceError (a ValueError).
+        """
+        keys = [keys] if isinstance(keys, str) else list(keys)
+        for key in keys:
+            if key != "all" and self._lookup(key) is None:
+                raise self._unknown("update keys", key)
+        if "all" in keys:
+            self.sample()
+            return
+        selection: _Selection = {}
+        for key in keys:
+            *parents, leaf = key.split(".")
+            node: _Selection | None = selection
+            for part in parents:
+                node = node.setdefault(part, {})
+                if node is None:  # an ancestor is already resampled whole
+                    break
+            else:
+                node[leaf] = None
+        if selection:
+            self._resample(selection, (), {}, 1000, 5.0, True)
+
+    def _resample(
+        self,
+        selection: _Selection | None,
+        args: tuple,
+        kwargs: dict,
+        max_tries: int,
+        warn_after_s: float | None,
+        set_value: bool,
+    ) -> dict[str, Any]:
+        snapshot = [(leaf, leaf._value) for _, leaf in self._leaves()]
+
+        def draw() -> None:
+            for key in self._order:
+                if selection is not None and key not in selection:
+                    continue
+                space, sub = self.spaces[key], None if selection is None else selection[key]
+                sub_args, sub_kwargs = _route(args, kwargs, key)
+                if sub is None:
+                    space.sample(*sub_args, max_tries=max_tries, warn_after_s=warn_after_s, **sub_kwargs)
+                else:
+                    space._resample(sub, sub_args, sub_kwargs, max_tries, warn_after_s, True)
+
+        accept = None if self.constrain_fn is None else (lambda _: bool(self.constrain_fn(self.value)))
+        try:
+            rejection_sample(self, draw, accept, max_tries, warn_after_s)
+        except BaseException:
+            self._restore(snapshot)
+            raise
+        out = self.value
+        if not set_value:
+            self._restore(snapshot)
+        return out
+
+    @staticmethod
+    def _restore(snapshot: list[tuple[StatefulSpaceMixin, Any]]) -> None:
+        for leaf, val in snapshot:
+            leaf._value = val
+
+    # -- display -----------------------------------------------------------------------------------
+    def to_str(self, indent: int = 0) -> str:
+        """Human-readable tree: names, space types and bounds, current and initial values."""
+        pad = "  " * (indent + 1)
+        head = f"Dict(sampling_order={self._order}{', constrained' if self.constrain_fn else ''})"
+        lines = [head]
+        for key, space in self.spaces.items():
+            if isinstance(space, Dict):
+                lines.append(f"{pad}{key}: {space.to_str(indent + 1)}")
+            else:
+                flag = ", constrained" if space.constrain_fn else ""
+                lines.append(
+                    f"{pad}{key}: {space!r}{flag} = {short_repr(space._value)} (init {short_repr(space._init_value)})"
+                )
+        return "\n".join(lines)

@@ -1,0 +1,318 @@
+"""Leaf spaces (Box, Discrete, MultiDiscrete, RGBBox) and the mixin holding their shared value logic."""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from ..errors import SpaceError
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["Box", "Discrete", "MultiDiscrete", "RGBBox", "StatefulSpaceMixin", "rejection_sample", "short_repr"]
+
+_FAST_INT_SPAN = 2**52  # integer boxes wider than this fall back to gymnasium's sampler
+
+
+def rejection_sample(
+    owner: Any,
+    draw: Callable[[], Any],
+    accept: Callable[[Any], bool] | None,
+    max_tries: int = 1000,
+    warn_after_s: float | None = 5.0,
+) -> Any:
+    """Call ``draw()`` until ``accept(candidate)`` holds and return that candidate.
+
+    ``accept=None`` takes the first draw. Logs one warning per call once more than
+    ``warn_after_s`` seconds have passed (``None`` disables it); raises ``RuntimeError``
+    after ``max_tries`` rejected draws.
+    """
+    if not isinstance(max_tries, (int, np.integer)) or isinstance(max_tries, bool) or max_tries < 1:
+        raise SpaceError(f"{type(owner).__name__}.sample requires max_tries >= 1, got {max_tries!r}")
+    if accept is None:
+        return draw()
+    start = time.perf_counter()
+    warned = warn_after_s is None
+    for tries in range(1, int(max_tries) + 1):
+        candidate = draw()
+        if accept(candidate):
+            return candidate
+        if not warned and time.perf_counter() - start > warn_after_s:
+            logger.warning(
+                "%s.sample: %d draws rejected by constrain_fn in %.1f s; the constraint may be too strict",
+                type(owner).__name__,
+                tries,
+                time.perf_counter() - start,
+            )
+            warned = True
+    raise RuntimeError(
+        f"{type(owner).__name__}.sample requires a constrain_fn that accepts some draw, got {max_tries} "
+        f"rejections in a row for {owner!r}; loosen the constraint or raise max_tries"
+    )
+
+
+def short_repr(x: Any) -> str:
+    """Compact text of a value for messages and :meth:`Dict.to_str`."""
+    if isinstance(x, np.ndarray):
+        return np.array2string(x, precision=4, threshold=12, edgeitems=2, separator=", ")
+    return repr(x.item()) if isinstance(x, np.generic) else repr(x)
+
+
+class StatefulSpaceMixin:
+    """Value, init value, constraint and rejection sampling shared by the leaf spaces.
+
+    Put it before the Gymnasium class in the bases; subclasses call :meth:`_setup_state` at the
+    end of ``__init__`` and may override :meth:`_default_value`, :meth:`_draw` and :meth:`_in_base`.
+    """
+
+    constrain_fn: Callable[[Any], bool] | None
+
+    # -- hooks --------------------------------------------------------------------------------
+    def _default_value(self) -> Any:
+        raise NotImplementedError("_default_value() -> an element of the space")
+
+    def _draw(self, *args: Any, **kwargs: Any) -> Any:
+        """One unconstrained draw (gymnasium's sampler)."""
+        return super().sample(*args, **kwargs)  # type: ignore[misc]
+
+    def _in_base(self, x: Any) -> bool:
+        """Membership in the Gymnasium space (bounds, shape, dtype), without the constraint."""
+        return bool(super().contains(x))  # type: ignore[misc]
+
+    # -- state --------------------------------------------------------------------------------
+    def _setup_state(self, init_value: Any, constrain_fn: Callable[[Any], bool] | None) -> None:
+        if constrain_fn is not None and not callable(constrain_fn):
+            raise SpaceError(f"{type(self).__name__} requires a callable constrain_fn, got {constrain_fn!r}")
+        self.constrain_fn = constrain_fn
+        what = "init_value"
+        if init_value is None:
+            init_value, what = self._default_value(), "default init_value"
+        self._init_value = self._coerce(init_value, what)
+        self._value = self._init_value
+
+    def _coerce(self, v: Any, what: str = "value") -> Any:
+        """``v`` as an element of this space's dtype and shape; SpaceError if it does not fit."""
+        name = f"{self!r}"
+        try:
+            arr = np.asarray(v)
+        except (TypeError, ValueError) as exc:
+            raise SpaceError(f"{name} requires a numeric {what}, got {v!r}") from exc
+        if arr.shape != self.shape:
+            raise SpaceError(f"{name} requires {what} of shape {self.shape}, got {short_repr(v)} with shape {arr.shape}")
+        if arr.dtype != self.dtype:
+            if not (np.issubdtype(arr.dtype, np.number) or arr.dtype == np.bool_):
+                raise SpaceError(f"{name} requires a numeric {what}, got {short_repr(v)} of dtype {arr.dtype}")
+            with np.errstate(invalid="ignore", over="ignore"):
+                cast = arr.astype(self.dtype)
+            if np.issubdtype(self.dtype, np.integer) and not np.array_equal(cast, arr):
+                raise SpaceError(f"{name} requires {what} to be an integer within its bounds, got {short_repr(v)}")
+            arr = cast
+        arr = arr[()] if arr.shape == () and not isinstance(self, gym.spaces.Box) else np.array(arr, copy=True)
+        if not self._in_base(arr):
+            raise SpaceError(f"{name} requires {what} inside its bounds, got {short_repr(v)}")
+        return arr
+
+    @property
+    def value(self) -> Any:
+        """The current element (a copy for arrays: change it with :meth:`set_value`)."""
+        v = self._value
+        return v.copy() if isinstance(v, np.ndarray) else v
+
+    @value.setter
+    def value(self, v: Any) -> None:
+        self.set_value(v)
+
+    @property
+    def init_value(self) -> Any:
+        """The element :meth:`reset` restores (a copy for arrays)."""
+        v = self._init_value
+        return v.copy() if isinstance(v, np.ndarray) else v
+
+    @init_value.setter
+    def init_value(self, v: Any) -> None:
+        self.set_init_value(v)
+
+    def set_value(self, v: Any) -> None:
+        """Make ``v`` the current value (cast to the space dtype; SpaceError if it does not fit)."""
+        self._value = self._coerce(v)
+
+    def set_init_value(self, v: Any) -> None:
+        """Make ``v`` the value :meth:`reset` restores; the current value is left as it is."""
+        self._init_value = self._coerce(v, "init_value")
+
+    def reset(self) -> None:
+        """Set the current value back to ``init_value``."""
+        self._value = self._init_value
+
+    # -- membership ---------------------------------------------------------------------------
+    def _satisfies(self, x: Any) -> bool:
+        return self.constrain_fn is None or bool(self.constrain_fn(x))
+
+    def contains(self, x: Any) -> bool:
+        """True when ``x`` is inside the bounds and satisfies ``constrain_fn``."""
+        return self._in_base(x) and self._satisfies(x)
+
+    def check(self) -> bool:
+        """True when the current value is valid; logs a warning when it is not."""
+        ok = self.contains(self._value)
+        if not ok:
+            logger.warning("%r: current value %s is outside the space or breaks constrain_fn", self, short_repr(self._value))
+        return ok
+
+    def seed(self, seed: int | None = None) -> Any:
+        """Seed the sampler (numpy integers are accepted)."""
+        return super().seed(int(seed) if isinstance(seed, np.integer) else seed)  # type: ignore[misc]
+
+    # -- sampling -----------------------------------------------------------------------------
+    def sample(
+        self,
+        *args: Any,
+        max_tries: int = 1000,
+        warn_after_s: float | None = 5.0,
+        set_value: bool = True,
+        **kwargs: Any,
+    ) -> Any:
+        """Draw an element satisfying ``constrain_fn`` (rejection sampling).
+
+        ``*args``/``**kwargs`` (``mask``, ``probability``) go to the Gymnasium sampler. While a
+        candidate is tested it is the space's current value, so a ``constrain_fn`` may read it
+        through a parent ``Dict.value``. With ``set_value=False`` the previous value is restored.
+        Raises ``RuntimeError`` when ``max_tries`` draws are all rejected.
+        """
+        previous = self._value
+
+        def draw() -> Any:
+            self._value = self._draw(*args, **kwargs)
+            return self._value
+
+        accept = None if self.constrain_fn is None else self._satisfies
+        try:
+            out = rejection_sample(self, draw, accept, max_tries, warn_after_s)
+        except BaseException:
+            self._value = previous
+            raise
+        if not set_value:
+            self._value = previous
+            return out
+        return out.copy() if isinstance(out, np.ndarray) else out
+
+
+class Box(StatefulSpaceMixin, gym.spaces.Box):
+    """A ``gymnasium.spaces.Box`` with a value; ``init_value=None`` -> midpoint of the bounds.
+
+    Example (circle constraint)::
+
+        space = Box(low=np.array([-1.0, -1.0]), high=np.array([1.0, 1.0]),
+                    init_value=np.array([0.0, 0.0]), constrain_fn=lambda p: np.linalg.norm(p) <= 1.0)
+        position = space.sample()  # only points inside the unit circle
+
+    ``Box(low, high, shape=(), ...)`` gives scalar factors whose value is a 0-d array.
+    Bounded boxes are sampled with one vectorized draw (no gymnasium bookkeeping per call).
+    """
+
+    def __init__(self, *args: Any, init_value: Any = None, constrain_fn: Callable | None = None, **kwargs: Any):
+        super().__init__(*args, **kwargs)
+        self._fast: tuple[np.ndarray, np.ndarray] | None = None
+        if self.is_bounded("both") and np.issubdtype(self.dtype, np.number):
+            low = self.low.astype(np.float64)
+            span = self.high.astype(np.float64) - low
+            integer = np.issubdtype(self.dtype, np.integer)
+            if np.all(np.isfinite(span)) and (not integer or np.all(span < _FAST_INT_SPAN)):
+                self._fast = (low, span + 1.0 if integer else span)
+        self._setup_state(init_value, constrain_fn)
+
+    def _default_value(self) -> np.ndarray:
+        low, high = self.low.astype(np.float64), self.high.astype(np.float64)
+        lo_ok, hi_ok = np.isfinite(low), np.isfinite(high)
+        with np.errstate(invalid="ignore"):
+            mid = np.where(lo_ok & hi_ok, 0.5 * low + 0.5 * high, np.where(lo_ok, low, np.where(hi_ok, high, 0.0)))
+        if np.issubdtype(self.dtype, np.integer):
+            mid = np.floor(mid)
+        return mid.astype(self.dtype)
+
+    def _draw(self, *args: Any, **kwargs: Any) -> np.ndarray:
+        if self._fast is None or any(a is not None for a in args) or any(v is not None for v in kwargs.values()):
+            return super()._draw(*args, **kwargs)
+        low, span = self._fast
+        u = self.np_random.random(self.shape)
+        if np.issubdtype(self.dtype, np.integer):
+            return np.asarray(low + np.floor(u * span), dtype=self.dtype)  # asarray keeps 0-d arrays for shape ()
+        x = np.asarray(low + u * span, dtype=self.dtype)
+        return np.minimum(x, self.high, out=x)  # float rounding must not step past high
+
+    def _in_base(self, x: Any) -> bool:
+        if not isinstance(x, np.ndarray):  # gymnasium warns on non-arrays; convert quietly
+            try:
+                x = np.asarray(x, dtype=self.dtype)
+            except (TypeError, ValueError):
+                return False
+        return bool(gym.spaces.Box.contains(self, x))
+
+
+class Discrete(StatefulSpaceMixin, gym.spaces.Discrete):
+    """A ``gymnasium.spaces.Discrete`` with a value (an ``np.int64``); default ``init_value`` is ``start``.
+
+    Example::
+
+        space = Discrete(n=10, init_value=0, constrain_fn=lambda x: x % 2 == 0)
+        value = space.sample()  # an even number, also stored in space.value
+        space.reset()           # space.value is 0 again
+    """
+
+    def __init__(self, *args: Any, init_value: Any = None, constrain_fn: Callable | None = None, **kwargs: Any):
+        super().__init__(*args, **kwargs)
+        self._setup_state(init_value, constrain_fn)
+
+    def _default_value(self) -> np.int64:
+        return self.start
+
+
+class MultiDiscrete(StatefulSpaceMixin, gym.spaces.MultiDiscrete):
+    """A ``gymnasium.spaces.MultiDiscrete`` with a value; default ``init_value`` is ``start``.
+
+    ``constrain_fn`` receives the whole array. Example::
+
+        space = MultiDiscrete(nvec=[5, 3, 10], init_value=np.array([2, 1, 5]))
+        settings = space.sample()
+        space.reset()  # back to [2, 1, 5]
+    """
+
+    def __init__(self, *args: Any, init_value: Any = None, constrain_fn: Callable | None = None, **kwargs: Any):
+        super().__init__(*args, **kwargs)
+        self._setup_state(init_value, constrain_fn)
+
+    def _default_value(self) -> np.ndarray:
+        return np.asarray(self.start, dtype=self.dtype)
+
+
+class RGBBox(Box):
+    """A uint8 ``Box`` in [0, 255] for colors or images; ``shape`` must have a dimension of size 3.
+
+    ``low``, ``high`` and ``dtype`` are fixed (passing them raises SpaceError). Example::
+
+        space = RGBBox(shape=(64, 64, 3), init_value=np.zeros((64, 64, 3), dtype=np.uint8))
+    """
+
+    def __init__(self, shape: tuple[int, ...] | int = (3,), *args: Any, init_value: Any = None, **kwargs: Any):
+        try:
+            shape = (int(shape),) if np.isscalar(shape) else tuple(int(s) for s in shape)
+        except (TypeError, ValueError) as exc:
+            raise SpaceError(f"RGBBox requires a shape tuple of ints, got {shape!r}") from exc
+        if 3 not in shape:
+            raise SpaceError(f"RGBBox requires a shape with a dimension of size 3 (RGB channels), got {shape}")
+        fixed = sorted({"low", "high", "dtype"} & kwargs.keys())
+        if args or fixed:
+            raise SpaceError(
+                f"RGBBox requires only shape, init_value, constrain_fn and seed (low=0, high=255, dtype=uint8 "
+                f"are fixed), got positional {args!r} and keywords {fixed}"
+            )
+        super().__init__(low=0, high=255, shape=shape, dtype=np.uint8, init_value=init_value, **kwargs)
+
+    def __repr__(self) -> str:
+        return f"RGBBox({self.shape})"
+
