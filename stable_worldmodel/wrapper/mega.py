@@ -1,0 +1,51 @@
+"""MegaWrapper: the standard pre-processing pipeline of World."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+
+import gymnasium as gym
+
+from .. import keys
+from .checks import EnsureGoalInfoWrapper, EnsureInfoKeysWrapper
+from .goal import ResizeGoalWrapper
+from .info import EverythingToInfoWrapper
+from .pixels import AddPixelsWrapper
+from .stack import StackedWrapper
+
+PIXELS_PATTERN = rf"^{keys.PIXELS}(?:\..*)?$"
+
+
+class MegaWrapper(gym.Wrapper):
+    """AddPixels -> EverythingToInfo -> EnsureInfoKeys -> EnsureGoalInfo -> ResizeGoal -> Stacked.
+
+    - ``image_shape``: (H, W) of ``pixels`` and ``goal``.
+    - ``pixels_transform`` / ``goal_transform``: callables on (H, W, 3) uint8 images.
+    - ``required_keys``: extra regexes that must match info keys (``^pixels(?:\\..*)?$`` is always added).
+    - ``separate_goal``: require ``info["goal"]`` after reset (goal-conditioned envs).
+    - ``history_size`` / ``frame_skip``: every info entry gets a history axis ``(T, ...)`` of the
+      last ``history_size`` values spaced ``frame_skip`` steps apart.
+    """
+
+    def __init__(
+        self,
+        env: gym.Env,
+        image_shape: tuple[int, int] = (84, 84),
+        pixels_transform: Callable | None = None,
+        goal_transform: Callable | None = None,
+        required_keys: Iterable | None = None,
+        separate_goal: Iterable | bool | None = True,
+        history_size: int = 1,
+        frame_skip: int = 1,
+    ):
+        required = [PIXELS_PATTERN, *(required_keys or [])]
+        env = AddPixelsWrapper(env, image_shape, pixels_transform)
+        env = EverythingToInfoWrapper(env)
+        env = EnsureInfoKeysWrapper(env, required)
+        env = EnsureGoalInfoWrapper(env, check_reset=bool(separate_goal), check_step=False)
+        env = ResizeGoalWrapper(env, image_shape, goal_transform)
+        env = StackedWrapper(env, None, history_size=history_size, frameskip=frame_skip)
+        super().__init__(env)
+        self.image_shape = tuple(image_shape)
+        self.history_size = history_size
+        self.frame_skip = frame_skip
