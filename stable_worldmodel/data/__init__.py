@@ -13,6 +13,30 @@ from .utils import get_cache_dir
 
 _ATTRS: dict[str, str] = {
     # name -> submodule that defines it
+    "Dataset": "dataset",
+    "HDF5Dataset": "hdf5",
+    "HDF5Writer": "writer",
+    "FolderDataset": "folder",
+    "ImageDataset": "folder",
+    "write_folder_dataset": "folder",
+    "VideoDataset": "video_dataset",
+    "write_video_dataset": "video_dataset",
+    "MergeDataset": "compose",
+    "ConcatDataset": "compose",
+    "GoalDataset": "compose",
+    "SpaceInfo": "info",
+    "VariationInfo": "info",
+    "WorldInfo": "info",
+    "dataset_info": "info",
+    "list_datasets": "info",
+    "delete_dataset": "info",
+    "list_models": "info",
+    "delete_model": "info",
+    "world_info": "info",
+    "list_worlds": "info",
+    "is_image": "info",
+    "repair": "_superblock",
+    "record_video_from_dataset": "video",
 }
 
 __all__ = ["get_cache_dir", *_ATTRS]
@@ -31,4 +55,24 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:  # pragma: no cover
-    pass
+    from ._superblock import repair  # noqa: F401
+    from .compose import ConcatDataset, GoalDataset, MergeDataset  # noqa: F401
+    from .dataset import Dataset  # noqa: F401
+    from .folder import FolderDataset, ImageDataset, write_folder_dataset  # noqa: F401
+    from .hdf5 import HDF5Dataset  # noqa: F401
+    from .info import (  # noqa: F401
+        SpaceInfo,
+        VariationInfo,
+        WorldInfo,
+        dataset_info,
+        delete_dataset,
+        delete_model,
+        is_image,
+        list_datasets,
+        list_models,
+        list_worlds,
+        world_info,
+    )
+    from .video import record_video_from_dataset  # noqa: F401
+    from .video_dataset import VideoDataset, write_video_dataset  # noqa: F401
+    from .writer import HDF5Writer  # noqa: F401

@@ -25,12 +25,13 @@ def get_cache_dir() -> Path:
 
 
 def resolve_dataset_path(name: str | os.PathLike, cache_dir: str | os.PathLike | None = None, suffix: str = ".h5") -> Path:
-    """Map a dataset name (or a path) to its file: ``<cache_dir>/<name><suffix>``.
+    """Map a dataset name to ``<cache_dir or get_cache_dir()>/<name><suffix>``.
 
-    ``name`` is used as is when it is an existing path or ends with ``suffix``.
+    ``name`` is taken as a path when it ends with ``suffix``, is an existing file, or
+    contains a directory part.
     """
     path = Path(name).expanduser()
-    if path.exists() or str(name).endswith(suffix) or path.is_absolute():
-        return path if str(path).endswith(suffix) or path.exists() else path.with_name(path.name + suffix)
+    if str(name).endswith(suffix) or path.is_file() or len(path.parts) > 1:
+        return path
     root = Path(cache_dir).expanduser() if cache_dir is not None else get_cache_dir()
     return root / f"{name}{suffix}"

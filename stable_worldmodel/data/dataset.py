@@ -1,0 +1,220 @@
+"""The :class:`Dataset` base shared by every dataset kind: episodes, windows, items.
+
+A dataset is a set of episodes stored as flat columns (rows of all episodes concatenated,
+episode ``e`` at rows ``offsets[e] : offsets[e] + lengths[e]``). A *sample* is a window of
+``num_steps`` frames spaced by ``frameskip`` inside one episode; it reads the
+``span = num_steps * frameskip`` rows starting at the window start::
+
+    rows    s  s+1 ... s+fs-1 | s+fs ... | ... s+span-1
+    frames  x                 | x        | ...            -> every column[::frameskip]  (T, ...)
+    action  a  a   ...  a     | a ...    | ...            -> action (T, frameskip * A)
+
+Every start with ``start + span <= length`` is a sample (no duplicates). Images come out
+as ``(T, C, H, W)`` uint8 tensors, everything else as ``(T, ...)`` tensors.
+
+Subclasses implement ``column_names``, ``lengths``, ``offsets`` and ``_read(col, start,
+stop) -> np.ndarray`` (rows of one column); the rest (indexing, items, episodes, chunks)
+lives here.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from .. import keys
+from ..errors import ConfigError, unknown_name
+
+logger = logging.getLogger(__name__)
+
+try:  # the base class of every dataset kind: a torch Dataset when torch is there
+    from torch.utils.data import Dataset as _TorchDataset
+except ImportError:  # pragma: no cover - torch is a base dependency
+    _TorchDataset = object
+
+
+def _positive(name: str, value: Any, owner: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+        raise ConfigError(f"{owner} requires {name} to be a positive int, got {value!r}")
+    return int(value)
+
+
+def image_like(arr: np.ndarray) -> bool:
+    """Rows ``(N, H, W, C)`` uint8 with C in 1, 3, 4."""
+    return arr.dtype == np.uint8 and arr.ndim == 4 and arr.shape[-1] in (1, 3, 4)
+
+
+class Dataset(_TorchDataset):
+    """Episodes of flat columns, sampled as windows (see the module docstring).
+
+    Args:
+        frameskip: rows between two sampled frames.
+        num_steps: frames per sample (T).
+        transform: optional callable applied to each item dict.
+        keys_to_load: columns to put in items (default: all).
+    """
+
+    def __init__(
+        self,
+        frameskip: int = 1,
+        num_steps: int = 1,
+        transform: Callable[[dict], dict] | None = None,
+        keys_to_load: Sequence[str] | None = None,
+    ):
+        owner = type(self).__name__
+        self.frameskip = _positive("frameskip", frameskip, owner)
+        self.num_steps = _positive("num_steps", num_steps, owner)
+        self.transform = transform
+        self._keys_to_load = None if keys_to_load is None else list(keys_to_load)
+        self._index: tuple[np.ndarray, np.ndarray] | None = None
+
+    # -- to implement -------------------------------------------------------------------------
+    @property
+    def column_names(self) -> list[str]:
+        raise NotImplementedError("column_names -> list[str]")
+
+    @property
+    def lengths(self) -> np.ndarray:
+        raise NotImplementedError("lengths -> (E,) int array of rows per episode")
+
+    @property
+    def offsets(self) -> np.ndarray:
+        raise NotImplementedError("offsets -> (E,) int array of first rows")
+
+    def _read(self, col: str, start: int, stop: int) -> np.ndarray:
+        raise NotImplementedError("_read(col, start, stop) -> rows start:stop of col")
+
+    # -- columns ------------------------------------------------------------------------------
+    def check_keys(self, names: Sequence[str]) -> list[str]:
+        """Raise :class:`UnknownNameError` (a KeyError) listing the columns for unknown names."""
+        cols = self.column_names
+        for name in names:
+            if name not in cols:
+                raise unknown_name(f"column of {type(self).__name__}", name, cols)
+        return list(names)
+
+    @property
+    def keys_to_load(self) -> list[str]:
+        if self._keys_to_load is None:
+            return list(self.column_names)
+        return self._keys_to_load
+
+    @property
+    def num_episodes(self) -> int:
+        return len(self.lengths)
+
+    @property
+    def num_rows(self) -> int:
+        return int(np.sum(self.lengths))
+
+    @property
+    def span(self) -> int:
+        """Rows read per sample: ``num_steps * frameskip``."""
+        return self.num_steps * self.frameskip
+
+    # -- sample index -------------------------------------------------------------------------
+    def _sample_index(self) -> tuple[np.ndarray, np.ndarray]:
+        if self._index is None:
+            counts = np.maximum(np.asarray(self.lengths, np.int64) - self.span + 1, 0)
+            self._index = (np.concatenate([[0], np.cumsum(counts)]), np.asarray(self.offsets, np.int64))
+        return self._index
+
+    def __len__(self) -> int:
+        return int(self._sample_index()[0][-1])
+
+    def locate(self, idx: int) -> tuple[int, int]:
+        """``(episode, step)`` of the first row of sample ``idx``."""
+        cum, _ = self._sample_index()
+        n = int(cum[-1])
+        if isinstance(idx, bool) or not isinstance(idx, (int, np.integer)):
+            raise TypeError(f"{type(self).__name__} indices must be ints, got {type(idx).__name__}")
+        if idx < 0:
+            idx += n
+        if not 0 <= idx < n:
+            raise IndexError(f"{type(self).__name__} index {idx} out of range for {n} samples")
+        ep = int(np.searchsorted(cum, idx, side="right") - 1)
+        return ep, int(idx - cum[ep])
+
+    def sample_rows(self, idx: int) -> int:
+        """Global row of the first row of sample ``idx``."""
+        ep, step = self.locate(idx)
+        return int(self._sample_index()[1][ep]) + step
+
+    # -- items --------------------------------------------------------------------------------
+    def _window(self, col: str, rows: np.ndarray) -> np.ndarray:
+        """Rows ``(span, ...)`` of one window -> ``(T, ...)`` frames (or grouped actions)."""
+        if col == keys.ACTION:
+            return rows.reshape(self.num_steps, -1)
+        return rows[:: self.frameskip]
+
+    def __getitem__(self, idx: int) -> dict[str, Any]:
+        start = self.sample_rows(idx)
+        item = {col: self._window(col, self._read(col, start, start + self.span)) for col in self.keys_to_load}
+        item = to_tensors(item)
+        return self.transform(item) if self.transform is not None else item
+
+    def load_episode(self, ep: int) -> dict[str, Any]:
+        """Every loaded column of episode ``ep`` as tensors ``(L, ...)`` (images ``(L, C, H, W)``)."""
+        lengths = self.lengths
+        if not -len(lengths) <= ep < len(lengths):
+            raise IndexError(f"{type(self).__name__} episode {ep} out of range for {len(lengths)} episodes")
+        start = int(self.offsets[ep])
+        stop = start + int(lengths[ep])
+        return to_tensors({col: self._read(col, start, stop) for col in self.keys_to_load})
+
+    def load_chunk(self, episodes_idx: Sequence[int], start: Sequence[int] | int, end: Sequence[int] | int) -> list[dict]:
+        """Steps ``start[i]:end[i]`` of episode ``episodes_idx[i]`` (raw rows, as tensors) for each i."""
+        episodes_idx = [int(e) for e in np.atleast_1d(episodes_idx)]
+        starts = np.broadcast_to(np.asarray(start), (len(episodes_idx),))
+        ends = np.broadcast_to(np.asarray(end), (len(episodes_idx),))
+        out = []
+        for ep, s, e in zip(episodes_idx, starts, ends):
+            length = int(self.lengths[ep])
+            if not 0 <= s < e <= length:
+                raise ConfigError(
+                    f"{type(self).__name__}.load_chunk requires 0 <= start < end <= {length} for episode {ep}, "
+                    f"got start={int(s)}, end={int(e)}"
+                )
+            row = int(self.offsets[ep]) + int(s)
+            out.append(to_tensors({col: self._read(col, row, row + int(e - s)) for col in self.keys_to_load}))
+        return out
+
+    def get_col_data(self, col: str) -> np.ndarray:
+        """Every committed row of column ``col`` as a numpy array ``(N, ...)``."""
+        self.check_keys([col])
+        return np.concatenate(
+            [self._read(col, int(o), int(o) + int(n)) for o, n in zip(self.offsets, self.lengths)]
+        ) if self.num_episodes else self._read(col, 0, 0)
+
+    def get_row_data(self, idx: int | Sequence[int]) -> dict[str, np.ndarray]:
+        """Row(s) ``idx`` (global row numbers) of every column, as numpy arrays."""
+        rows = np.atleast_1d(np.asarray(idx, np.int64))
+        n = self.num_rows
+        if rows.size and (rows.min() < 0 or rows.max() >= n):
+            raise IndexError(f"{type(self).__name__} row {rows.tolist()} out of range for {n} rows")
+        out = {col: np.stack([self._read(col, int(r), int(r) + 1)[0] for r in rows]) for col in self.column_names}
+        if np.ndim(idx) == 0:
+            return {k: v[0] for k, v in out.items()}
+        return out
+
+    def __repr__(self) -> str:
+        return (
+            f"{type(self).__name__}(episodes={self.num_episodes}, rows={self.num_rows}, samples={len(self)}, "
+            f"num_steps={self.num_steps}, frameskip={self.frameskip}, columns={self.column_names})"
+        )
+
+
+def to_tensors(item: dict[str, np.ndarray]) -> dict[str, Any]:
+    """numpy columns -> torch tensors; images ``(T, H, W, C)`` -> ``(T, C, H, W)``."""
+    import torch
+
+    out = {}
+    for k, v in item.items():
+        arr = np.asarray(v)
+        if image_like(arr):
+            arr = arr.transpose(0, 3, 1, 2)
+        out[k] = torch.from_numpy(np.ascontiguousarray(arr))
+    return out

@@ -1,0 +1,196 @@
+"""``HDF5Dataset``: windows of a recorded ``.h5`` file (layout in :mod:`.writer`).
+
+Reads are contiguous row slices. Each column is read in blocks aligned to its HDF5 chunks
+and the last few decoded blocks are kept (a small per-column LRU), so consecutive or nearby
+windows cost a numpy slice instead of an HDF5 call and a decompression. The file is opened
+lazily, once per process (DataLoader workers each open their own handle), in SWMR read
+mode so a file that is still being recorded can be read: only committed episodes
+(``ep_len`` / ``ep_offset``) are visible.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from collections import OrderedDict
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import keys
+from ..errors import DatasetFormatError
+from . import _superblock
+from .dataset import Dataset
+from .utils import resolve_dataset_path
+
+logger = logging.getLogger(__name__)
+
+BLOCK_BYTES = 1 << 20  # target decoded bytes per cached block
+BLOCKS_PER_COLUMN = 8
+
+
+def open_h5(path: str | os.PathLike):
+    """Open ``path`` read-only: SWMR read (works while it is written), plain as a fallback.
+
+    A file already open in this process is shared by HDF5 only with the same flags, so the
+    plain modes are tried too; a file left flagged by a killed writer is repaired first.
+    """
+    import h5py
+
+    if _superblock.needs_repair(path):
+        try:
+            return h5py.File(path, "r", libver="latest", swmr=True, locking=False)
+        except OSError:
+            _superblock.repair(path)
+    attempts = (dict(libver="latest", swmr=True, locking=False), dict(), dict(locking=False))
+    for i, kwargs in enumerate(attempts):
+        try:
+            return h5py.File(path, "r", **kwargs)
+        except OSError as exc:
+            if i == len(attempts) - 1:
+                raise DatasetFormatError(f"HDF5Dataset requires a readable HDF5 file, got {str(path)!r}: {exc}") from exc
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+class HDF5Dataset(Dataset):
+    """Samples of ``num_steps`` frames spaced by ``frameskip`` from ``<cache_dir>/<name>.h5``.
+
+    Args:
+        name: dataset name in ``cache_dir`` (default :func:`get_cache_dir`) or a path to an ``.h5`` file.
+        frameskip: rows between two sampled frames; ``action`` groups the ``frameskip`` actions.
+        num_steps: frames per sample (T).
+        transform: callable applied to each item dict.
+        keys_to_load: columns in items (default: every column).
+        keys_to_cache: columns loaded into memory at construction (fast for small columns).
+        cache_dir: directory holding ``<name>.h5``.
+
+    Items: ``{col: tensor (T, ...)}``; images ``(T, C, H, W)`` uint8; ``action`` ``(T, frameskip * A)``.
+    """
+
+    def __init__(
+        self,
+        name: str | os.PathLike,
+        frameskip: int = 1,
+        num_steps: int = 1,
+        transform: Callable[[dict], dict] | None = None,
+        keys_to_load: Sequence[str] | None = None,
+        keys_to_cache: Sequence[str] | None = None,
+        cache_dir: str | os.PathLike | None = None,
+    ):
+        super().__init__(frameskip=frameskip, num_steps=num_steps, transform=transform, keys_to_load=keys_to_load)
+        self.path = resolve_dataset_path(name, cache_dir)
+        if not self.path.is_file():
+            raise FileNotFoundError(f"HDF5Dataset requires an existing .h5 file, got {str(self.path)!r} (not found)")
+        self.name = self.path.stem
+        self._file = None
+        self._pid = None
+        self._blocks: dict[str, OrderedDict] = {}
+        f = self._handle()
+        missing = [k for k in (keys.EP_LEN, keys.EP_OFFSET) if k not in f]
+        if missing:
+            raise DatasetFormatError(f"HDF5Dataset requires columns {missing} in {self.path}, got {sorted(f)}")
+        self._lengths = f[keys.EP_LEN][:].astype(np.int64)
+        self._offsets = f[keys.EP_OFFSET][: len(self._lengths)].astype(np.int64)
+        if len(self._offsets) != len(self._lengths):
+            raise DatasetFormatError(
+                f"HDF5Dataset requires one ep_offset per ep_len in {self.path}, "
+                f"got {len(self._offsets)} offsets for {len(self._lengths)} episodes"
+            )
+        import h5py
+
+        self._columns = [k for k, v in f.items() if isinstance(v, h5py.Dataset) and k not in (keys.EP_LEN, keys.EP_OFFSET)]
+        self._shapes = {k: (tuple(f[k].shape[1:]), f[k].dtype) for k in self._columns}
+        self._block_rows = {k: self._choose_block(f[k]) for k in self._columns}
+        if keys_to_load is not None:
+            self.check_keys(keys_to_load)
+        self._cache: dict[str, np.ndarray] = {}
+        if keys_to_cache:
+            end = int(self._offsets[-1] + self._lengths[-1]) if len(self._lengths) else 0
+            for col in self.check_keys(list(keys_to_cache)):
+                self._cache[col] = f[col][:end]
+
+    # -- file handle --------------------------------------------------------------------------
+    def _handle(self):
+        pid = os.getpid()
+        if self._file is None or self._pid != pid:  # first use in this process (e.g. a DataLoader worker)
+            self._file = open_h5(self.path)
+            self._pid = pid
+            self._blocks = {}
+        return self._file
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state["_file"] = None
+        state["_pid"] = None
+        state["_blocks"] = {}
+        return state
+
+    def close(self) -> None:
+        if self._file is not None:
+            self._file.close()
+            self._file = None
+
+    @staticmethod
+    def _choose_block(dset) -> int:
+        chunk = dset.chunks[0] if dset.chunks else 1
+        row_bytes = max(int(np.prod(dset.shape[1:], dtype=np.int64)) * dset.dtype.itemsize, 1)
+        return max(chunk, (BLOCK_BYTES // row_bytes) // chunk * chunk)
+
+    # -- Dataset interface --------------------------------------------------------------------
+    @property
+    def column_names(self) -> list[str]:
+        return list(self._columns)
+
+    @property
+    def lengths(self) -> np.ndarray:
+        return self._lengths
+
+    @property
+    def offsets(self) -> np.ndarray:
+        return self._offsets
+
+    def column_shape(self, col: str) -> tuple[tuple[int, ...], np.dtype]:
+        """Per-row shape and dtype of ``col``."""
+        self.check_keys([col])
+        return self._shapes[col]
+
+    def _read(self, col: str, start: int, stop: int) -> np.ndarray:
+        cached = self._cache.get(col)
+        if cached is not None:
+            return cached[start:stop]
+        size = self._block_rows[col]
+        b0, b1 = start // size, (stop - 1) // size if stop > start else start // size
+        if b0 != b1 or stop <= start:  # spans blocks (or empty): one direct read
+            return self._handle()[col][start:stop]
+        block = self._block(col, b0, size)
+        return block[start - b0 * size : stop - b0 * size]
+
+    def _block(self, col: str, b: int, size: int) -> np.ndarray:
+        f = self._handle()
+        lru = self._blocks.setdefault(col, OrderedDict())
+        block = lru.get(b)
+        if block is None:
+            block = f[col][b * size : (b + 1) * size]
+            lru[b] = block
+            if len(lru) > BLOCKS_PER_COLUMN:
+                lru.popitem(last=False)
+        else:
+            lru.move_to_end(b)
+        return block
+
+    def get_col_data(self, col: str) -> np.ndarray:
+        self.check_keys([col])
+        end = self.num_rows and int(self._offsets[-1] + self._lengths[-1])
+        if col in self._cache:
+            return self._cache[col][:end]
+        return self._handle()[col][:end]
+
+    def __repr__(self) -> str:
+        return f"HDF5Dataset({str(self.path)!r}, " + super().__repr__().split("(", 1)[1]
+
+
+def dataset_path(name: str | os.PathLike, cache_dir: str | os.PathLike | None = None) -> Path:
+    """Path of HDF5 dataset ``name`` (see :class:`HDF5Dataset`)."""
+    return resolve_dataset_path(name, cache_dir)

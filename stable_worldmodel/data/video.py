@@ -1,0 +1,112 @@
+"""MP4 writing (H.264, yuv420p, even sizes: plays in browsers) and dataset replays."""
+
+from __future__ import annotations
+
+import logging
+import os
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import keys
+from ..errors import ConfigError
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["write_mp4", "hstack_frames", "vstack_frames", "record_video_from_dataset"]
+
+
+def _even(frame: np.ndarray) -> np.ndarray:
+    """Pad ``(H, W, 3)`` with black to even H and W (yuv420p needs them)."""
+    h, w = frame.shape[:2]
+    if h % 2 == 0 and w % 2 == 0:
+        return frame
+    return np.pad(frame, ((0, h % 2), (0, w % 2), (0, 0)))
+
+
+def _rgb(frame: Any) -> np.ndarray:
+    arr = np.asarray(frame)
+    if arr.ndim == 3 and arr.shape[0] in (1, 3) and arr.shape[-1] not in (1, 3):  # (C, H, W)
+        arr = arr.transpose(1, 2, 0)
+    if arr.ndim == 2:
+        arr = arr[..., None]
+    if arr.shape[-1] == 1:
+        arr = np.repeat(arr, 3, axis=-1)
+    if arr.dtype != np.uint8:
+        raise ConfigError(f"write_mp4 requires uint8 frames, got {arr.dtype}")
+    return arr[..., :3]
+
+
+def hstack_frames(frames: Sequence[np.ndarray]) -> np.ndarray:
+    """Frames ``(H_i, W_i, 3)`` side by side (shorter ones padded at the bottom)."""
+    frames = [_rgb(f) for f in frames]
+    h = max(f.shape[0] for f in frames)
+    return np.concatenate([np.pad(f, ((0, h - f.shape[0]), (0, 0), (0, 0))) for f in frames], axis=1)
+
+
+def vstack_frames(frames: Sequence[np.ndarray]) -> np.ndarray:
+    """Frames ``(H_i, W_i, 3)`` one above the other (narrower ones padded on the right)."""
+    frames = [_rgb(f) for f in frames]
+    w = max(f.shape[1] for f in frames)
+    return np.concatenate([np.pad(f, ((0, 0), (0, w - f.shape[1]), (0, 0))) for f in frames], axis=0)
+
+
+def write_mp4(path: str | os.PathLike, frames: Iterable[np.ndarray], fps: int = 30) -> Path:
+    """Write ``frames`` (each ``(H, W, 3)`` uint8, same size) as an H.264 MP4 at ``path``."""
+    import imageio.v2 as imageio
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    writer = imageio.get_writer(
+        str(path), fps=fps, codec="libx264", pixelformat="yuv420p", macro_block_size=1, ffmpeg_log_level="error"
+    )
+    try:
+        count = 0
+        for frame in frames:
+            writer.append_data(_even(_rgb(frame)))
+            count += 1
+    finally:
+        writer.close()
+    if count == 0:
+        path.unlink(missing_ok=True)
+        raise ConfigError(f"write_mp4 requires at least one frame, got none for {path}")
+    return path
+
+
+def record_video_from_dataset(
+    video_path: str | os.PathLike,
+    dataset: Any,
+    episode_idx: int | Sequence[int],
+    max_steps: int = 500,
+    fps: int = 30,
+    viewname: str | Sequence[str] = keys.PIXELS,
+    cache_dir: str | os.PathLike | None = None,
+) -> list[Path]:
+    """Write ``<video_path>/episode_<idx>.mp4`` for each episode of ``dataset``.
+
+    ``dataset`` is a :class:`~.dataset.Dataset` or the name of an HDF5 dataset. The views named
+    by ``viewname`` are placed side by side; a ``goal`` column (when not already a view) goes
+    below them. At most ``max_steps`` frames per episode. Returns the written paths.
+    """
+    if isinstance(dataset, (str, os.PathLike)):
+        from .hdf5 import HDF5Dataset
+
+        dataset = HDF5Dataset(dataset, cache_dir=cache_dir)
+    views = [viewname] if isinstance(viewname, str) else list(viewname)
+    dataset.check_keys(views)
+    below = [keys.GOAL] if keys.GOAL in dataset.column_names and keys.GOAL not in views else []
+    out = []
+    for ep in np.atleast_1d(episode_idx).tolist():
+        if not -dataset.num_episodes <= ep < dataset.num_episodes:
+            raise IndexError(f"record_video_from_dataset episode {ep} out of range for {dataset.num_episodes} episodes")
+        start = int(dataset.offsets[ep])
+        stop = start + min(int(dataset.lengths[ep]), int(max_steps))
+        top = [dataset._read(v, start, stop) for v in views]
+        bottom = [dataset._read(v, start, stop) for v in below]
+        frames = (
+            vstack_frames([hstack_frames([t[i] for t in top]), *[b[i] for b in bottom]]) for i in range(stop - start)
+        )
+        out.append(write_mp4(Path(video_path) / f"episode_{ep}.mp4", frames, fps=fps))
+    return out

@@ -1,0 +1,302 @@
+"""Recording loops behind ``World.record_dataset`` / ``record_video`` / ``evaluate_from_dataset``.
+
+They use only the public World contract: ``reset``, ``reset_envs``, ``step``, ``infos``
+(every entry ``(B, T, ...)``), ``terminateds`` / ``truncateds`` ``(B,)``, ``envs.call`` /
+``envs.call_each``, ``num_envs`` and ``verbose``.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import time
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import keys
+from ..errors import ConfigError
+
+logger = logging.getLogger(__name__)
+
+SEED_LIMIT = 2**31 - 1
+
+
+def _progress(world: Any, total: int, desc: str):
+    from tqdm.auto import tqdm
+
+    return tqdm(total=total, desc=desc, unit="ep", disable=int(getattr(world, "verbose", 1)) <= 0)
+
+
+def _last_frames(infos: Mapping[str, Any]) -> dict[str, np.ndarray]:
+    """Recordable info columns at the last history frame: ``{key: (B, ...)}`` (copies)."""
+    from ..data.writer import is_recordable
+
+    out = {}
+    for key, value in infos.items():
+        if key.startswith("_"):
+            continue
+        arr = np.asarray(value)
+        if arr.ndim < 2 or not is_recordable(arr):
+            continue
+        out[key] = np.array(arr[:, -1])
+    return out
+
+
+def _finish_episode(rows: dict[str, list[np.ndarray]]) -> dict[str, np.ndarray]:
+    """Stack an episode's rows; row t gets the action of step t+1 (NaN on the last row)."""
+    episode = {k: np.stack(v) for k, v in rows.items()}
+    action = episode.get(keys.ACTION)
+    if action is not None:
+        action = action.astype(np.result_type(action.dtype, np.float32), copy=False)
+        shifted = np.empty_like(action)
+        shifted[:-1] = action[1:]
+        shifted[-1] = np.nan
+        episode[keys.ACTION] = shifted
+    return episode
+
+
+def record_dataset(
+    world: Any,
+    dataset_name: str,
+    episodes: int = 10,
+    seed: int | None = None,
+    cache_dir: str | os.PathLike | None = None,
+    options: dict | None = None,
+) -> Path:
+    """Record exactly ``episodes`` complete episodes into ``<cache_dir>/<dataset_name>.h5``.
+
+    Each env runs its own episodes; an env that finishes is reset alone (``reset_envs``) with
+    the next seed, and episodes still running when enough are written are discarded. Episode
+    ``k`` of a new file uses seed ``seed + k`` (a random base when ``seed`` is None). Writing to
+    an existing name appends; seeds then continue from the file's ``next_seed`` attribute so
+    they never repeat. Each finished batch of episodes is committed (see
+    :mod:`stable_worldmodel.data.writer`), so an interrupted recording keeps what it wrote.
+    Returns the file path.
+    """
+    from ..data.utils import resolve_dataset_path
+    from ..data.writer import HDF5Writer
+
+    if isinstance(episodes, bool) or not isinstance(episodes, (int, np.integer)) or episodes < 1:
+        raise ConfigError(f"record_dataset requires episodes to be a positive int, got {episodes!r}")
+    path = resolve_dataset_path(dataset_name, cache_dir)
+    n = int(world.num_envs)
+    with HDF5Writer(path) as writer:
+        if writer.next_seed is not None:
+            next_seed = writer.next_seed
+        elif seed is not None:
+            next_seed = int(seed)
+        else:
+            next_seed = int(np.random.SeedSequence().entropy % SEED_LIMIT)
+
+        def take(k: int) -> list[int]:
+            nonlocal next_seed
+            seeds = [(next_seed + i) % SEED_LIMIT for i in range(k)]
+            next_seed = (next_seed + k) % SEED_LIMIT
+            return seeds
+
+        world.reset(seed=take(n), options=options)
+        buffers: list[dict[str, list[np.ndarray]]] = [{} for _ in range(n)]
+
+        def push(env_ids: Sequence[int]) -> None:
+            frames = _last_frames(world.infos)
+            for i in env_ids:
+                for key, value in frames.items():
+                    buffers[i].setdefault(key, []).append(value[i])
+
+        push(range(n))
+        done = rows = 0
+        t0 = time.perf_counter()
+        with _progress(world, episodes, f"Recording {path.name}") as bar:
+            while done < episodes:
+                world.step()
+                push(range(n))
+                ended = np.flatnonzero(np.asarray(world.terminateds) | np.asarray(world.truncateds))
+                if not len(ended):
+                    continue
+                batch = [_finish_episode(buffers[i]) for i in ended[: episodes - done]]
+                writer.write_episodes(batch, next_seed=next_seed)
+                done += len(batch)
+                rows += sum(len(next(iter(ep.values()))) for ep in batch)
+                bar.update(len(batch))
+                bar.set_postfix(rows_per_s=f"{rows / max(time.perf_counter() - t0, 1e-9):.0f}")
+                if done >= episodes:
+                    break
+                ids = [int(i) for i in ended]
+                world.reset_envs(ids, seeds=take(len(ids)), options=[options] * len(ids))
+                for i in ids:
+                    buffers[i] = {}
+                push(ids)
+        logger.info("Recorded %d episodes (%d rows) to %s", done, rows, path)
+    return path
+
+
+def _frame(infos: Mapping[str, Any], views: Sequence[str], env: int) -> np.ndarray:
+    from ..data.video import hstack_frames, vstack_frames
+
+    top = hstack_frames([np.asarray(infos[v])[env, -1] for v in views])
+    if keys.GOAL in infos and keys.GOAL not in views:
+        return vstack_frames([top, np.asarray(infos[keys.GOAL])[env, -1]])
+    return top
+
+
+def _check_views(infos: Mapping[str, Any], viewname: str | Sequence[str]) -> list[str]:
+    from ..errors import unknown_name
+
+    views = [viewname] if isinstance(viewname, str) else list(viewname)
+    for v in views:
+        if v not in infos:
+            raise unknown_name("info key (viewname)", v, [k for k in infos if not k.startswith("_")])
+    return views
+
+
+def record_video(
+    world: Any,
+    video_path: str | os.PathLike,
+    max_steps: int = 500,
+    fps: int = 30,
+    viewname: str | Sequence[str] = keys.PIXELS,
+    seed: int | None = None,
+    options: dict | None = None,
+) -> list[Path]:
+    """Roll out the policy and write ``<video_path>/env_<i>.mp4`` for every env.
+
+    Each frame shows the ``viewname`` views side by side with the goal image below (when the
+    infos have one). Recording stops after ``max_steps`` steps or when any env ends.
+    Returns the written paths.
+    """
+    from ..data.video import write_mp4
+
+    world.reset(seed=seed, options=options)
+    views = _check_views(world.infos, viewname)
+    n = int(world.num_envs)
+    frames: list[list[np.ndarray]] = [[_frame(world.infos, views, i)] for i in range(n)]
+    for _ in range(int(max_steps)):
+        world.step()
+        for i in range(n):
+            frames[i].append(_frame(world.infos, views, i))
+        if np.any(np.asarray(world.terminateds) | np.asarray(world.truncateds)):
+            break
+    return [write_mp4(Path(video_path) / f"env_{i}.mp4", frames[i], fps=fps) for i in range(n)]
+
+
+def record_video_from_dataset(
+    world: Any,
+    video_path: str | os.PathLike,
+    dataset_name: str,
+    episode_idx: int | Sequence[int],
+    max_steps: int = 500,
+    fps: int = 30,
+    num_proc: int = 4,
+    viewname: str | Sequence[str] = keys.PIXELS,
+    cache_dir: str | os.PathLike | None = None,
+) -> list[Path]:
+    """Write ``<video_path>/episode_<idx>.mp4`` for recorded episodes (``num_proc`` is unused:
+    HDF5 episodes are read directly). See :func:`stable_worldmodel.data.video.record_video_from_dataset`."""
+    from ..data.video import record_video_from_dataset as replay
+
+    return replay(video_path, dataset_name, episode_idx, max_steps=max_steps, fps=fps, viewname=viewname, cache_dir=cache_dir)
+
+
+
+def _check_eval_args(world, dataset, episodes_idx, start_steps, goal_offset_steps, eval_budget) -> tuple[list, list]:
+    episodes_idx = [int(e) for e in np.atleast_1d(episodes_idx)]
+    start_steps = [int(s) for s in np.atleast_1d(start_steps)]
+    n = int(world.num_envs)
+    if len(episodes_idx) != len(start_steps):
+        raise ConfigError(
+            f"evaluate_from_dataset requires episodes_idx and start_steps of the same length, "
+            f"got {len(episodes_idx)} episodes_idx and {len(start_steps)} start_steps"
+        )
+    if len(episodes_idx) != n:
+        raise ConfigError(
+            f"evaluate_from_dataset requires one episode per env (num_envs={n}), got {len(episodes_idx)} episodes_idx"
+        )
+    for name, value, low in (("goal_offset_steps", goal_offset_steps, 0), ("eval_budget", eval_budget, 1)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
+            raise ConfigError(f"evaluate_from_dataset requires {name} to be an int >= {low}, got {value!r}")
+    lengths = dataset.lengths
+    for ep, start in zip(episodes_idx, start_steps):
+        if not 0 <= ep < len(lengths):
+            raise ConfigError(f"evaluate_from_dataset requires episodes_idx in [0, {len(lengths)}), got {ep}")
+        if start < 0 or start + goal_offset_steps >= lengths[ep]:
+            raise ConfigError(
+                f"evaluate_from_dataset requires start_steps + goal_offset_steps < episode length, got episode {ep} "
+                f"(length {int(lengths[ep])}) with start_steps={start}, goal_offset_steps={goal_offset_steps}"
+            )
+    return episodes_idx, start_steps
+
+
+def _apply_callables(world: Any, callables: Sequence[Mapping[str, Any]] | None) -> None:
+    """``[{"method": name, "args": {...}}, ...]``: call ``env.unwrapped.<name>(**args)`` on every env."""
+    for spec in callables or []:
+        if not isinstance(spec, Mapping) or not isinstance(spec.get("method"), str):
+            raise ConfigError(
+                f"evaluate_from_dataset requires callables as {{'method': name, 'args': {{...}}}} dicts, got {spec!r}"
+            )
+        world.envs.call(spec["method"], **dict(spec.get("args") or {}))
+
+
+def evaluate_from_dataset(
+    world: Any,
+    dataset: Any,
+    episodes_idx: Sequence[int],
+    start_steps: Sequence[int],
+    goal_offset_steps: int,
+    eval_budget: int,
+    callables: list[dict] | None = None,
+    save_video: bool = True,
+    video_path: str | os.PathLike = "./",
+) -> dict:
+    """Start env i at step ``start_steps[i]`` of episode ``episodes_idx[i]`` of ``dataset``.
+
+    The goal is the recorded state ``goal_offset_steps`` later; the env builds its reset
+    options from both rows (``SupportsDatasetReset.reset_options_from_dataset``). The
+    policy then gets ``eval_budget`` steps; an env succeeds when it terminates. ``callables``
+    (``[{"method": name, "args": {...}}]``) are called on every env before the reset.
+    ``dataset`` is a :class:`~stable_worldmodel.data.Dataset` or an HDF5 dataset name.
+
+    Returns ``success_rate`` (percent), ``episode_successes`` ``(B,)`` bool,
+    ``steps_to_success`` ``(B,)`` (-1 when not reached), ``episodes_idx`` and ``start_steps``.
+    Raises ValueError (:class:`ConfigError`) for mismatched lengths, a count other than
+    ``num_envs`` or a goal past an episode's end.
+    """
+    from ..data.video import write_mp4
+
+    if isinstance(dataset, (str, os.PathLike)):
+        from ..data.hdf5 import HDF5Dataset
+
+        dataset = HDF5Dataset(dataset)
+    episodes_idx, start_steps = _check_eval_args(world, dataset, episodes_idx, start_steps, goal_offset_steps, eval_budget)
+    rows = [int(dataset.offsets[e]) + s for e, s in zip(episodes_idx, start_steps)]
+    starts = [dataset.get_row_data(r) for r in rows]
+    goals = [dataset.get_row_data(r + int(goal_offset_steps)) for r in rows]
+    _apply_callables(world, callables)
+    options = world.envs.call_each("reset_options_from_dataset", [(s, g) for s, g in zip(starts, goals)])
+    n = int(world.num_envs)
+    world.reset_envs(list(range(n)), options=list(options))
+    views = [keys.PIXELS] if save_video and keys.PIXELS in world.infos else []
+    frames: list[list[np.ndarray]] = [[_frame(world.infos, views, i)] if views else [] for i in range(n)]
+    steps_to_success = np.full(n, -1, np.int64)
+    for t in range(int(eval_budget)):
+        world.step()
+        newly = np.asarray(world.terminateds, bool) & (steps_to_success < 0)
+        steps_to_success[newly] = t + 1
+        if views:
+            for i in range(n):
+                frames[i].append(_frame(world.infos, views, i))
+        if np.all(steps_to_success >= 0):
+            break
+    if views:
+        for i in range(n):
+            write_mp4(Path(video_path) / f"env_{i}.mp4", frames[i])
+    successes = steps_to_success >= 0
+    return {
+        "success_rate": float(successes.mean() * 100.0),
+        "episode_successes": successes,
+        "steps_to_success": steps_to_success,
+        "episodes_idx": episodes_idx,
+        "start_steps": start_steps,
+    }
