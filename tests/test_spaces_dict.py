@@ -290,6 +290,13 @@ def test_seed_makes_nested_sampling_deterministic():
         assert_tree_equal(a.value, b.value)
 
 
+def test_seed_keyword_at_construction():
+    a = Dict({"x": Discrete(100), "y": Box(0.0, 1.0, shape=(2,), seed=5)}, seed=3)
+    b = Dict({"x": Discrete(100), "y": Box(0.0, 1.0, shape=(2,))})
+    b.seed(3)
+    assert_tree_equal(a.sample(), b.sample())
+
+
 def test_mask_mapping_is_routed_per_key():
     space = Dict({"d": Discrete(4), "n": Dict({"e": Discrete(3)})})
     out = space.sample(mask={"d": np.array([0, 0, 0, 1], np.int8), "n": {"e": np.array([0, 1, 0], np.int8)}})

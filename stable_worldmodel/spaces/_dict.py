@@ -44,6 +44,10 @@ class Dict(gym.spaces.Dict):
       over ``space["a"].value``, as the seed documents). It is enforced by rejection sampling
       in :meth:`sample` and :meth:`update`; a nested Dict's ``constrain_fn`` gets its own subtree.
     - ``init_value`` (nested or dotted, partial allowed) overrides the leaves' defaults.
+    - ``update(keys)`` resamples dotted names (a nested Dict name: its whole subtree); the name
+      ``"all"`` is reserved and resamples everything.
+    - ``set_value``/``set_init_value`` take nested or dotted dicts, partial ones too; like the
+      leaves' setters they validate bounds, shapes and dtypes but do not call ``constrain_fn``.
 
     Example::
 
@@ -284,7 +288,7 @@ class Dict(gym.spaces.Dict):
             if key != "all" and self._lookup(key) is None:
                 raise self._unknown("update keys", key)
         if "all" in keys:
-            self.sample()
+            self._resample(None, (), {}, 1000, 5.0, True, return_value=False)
             return
         selection: _Selection = {}
         for key in keys:
@@ -297,7 +301,7 @@ class Dict(gym.spaces.Dict):
             else:
                 node[leaf] = None
         if selection:
-            self._resample(selection, (), {}, 1000, 5.0, True)
+            self._resample(selection, (), {}, 1000, 5.0, True, return_value=False)
 
     def _resample(
         self,
@@ -307,30 +311,38 @@ class Dict(gym.spaces.Dict):
         max_tries: int,
         warn_after_s: float | None,
         set_value: bool,
-    ) -> dict[str, Any]:
+        return_value: bool = True,
+    ) -> dict[str, Any] | None:
+        """Resample ``selection`` (None: everything) atomically; return the new nested value."""
         snapshot = [(leaf, leaf._value) for _, leaf in self._leaves()]
-
-        def draw() -> None:
-            for key in self._order:
-                if selection is not None and key not in selection:
-                    continue
-                space, sub = self.spaces[key], None if selection is None else selection[key]
-                sub_args, sub_kwargs = _route(args, kwargs, key)
-                if sub is None:
-                    space.sample(*sub_args, max_tries=max_tries, warn_after_s=warn_after_s, **sub_kwargs)
-                else:
-                    space._resample(sub, sub_args, sub_kwargs, max_tries, warn_after_s, True)
-
-        accept = None if self.constrain_fn is None else (lambda _: bool(self.constrain_fn(self.value)))
         try:
-            rejection_sample(self, draw, accept, max_tries, warn_after_s)
+            self._sample_in_place(selection, args, kwargs, max_tries, warn_after_s)
         except BaseException:
             self._restore(snapshot)
             raise
-        out = self.value
+        out = self.value if return_value else None
         if not set_value:
             self._restore(snapshot)
         return out
+
+    def _sample_in_place(
+        self, selection: _Selection | None, args: tuple, kwargs: dict, max_tries: int, warn_after_s: float | None
+    ) -> None:
+        """Rejection loop of this level: draw the selected children in order until ``constrain_fn`` holds."""
+
+        def draw() -> None:
+            for key in self._order:
+                if selection is None:
+                    sub = None
+                elif key in selection:
+                    sub = selection[key]
+                else:
+                    continue
+                sub_args, sub_kwargs = _route(args, kwargs, key)
+                self.spaces[key]._sample_in_place(sub, sub_args, sub_kwargs, max_tries, warn_after_s)
+
+        accept = None if self.constrain_fn is None else (lambda _: bool(self.constrain_fn(self.value)))
+        rejection_sample(self, draw, accept, max_tries, warn_after_s)
 
     @staticmethod
     def _restore(snapshot: list[tuple[StatefulSpaceMixin, Any]]) -> None:

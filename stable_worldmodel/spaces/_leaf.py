@@ -71,6 +71,7 @@ class StatefulSpaceMixin:
     """
 
     constrain_fn: Callable[[Any], bool] | None
+    _scalar_value = False  # True: a shape-() value is kept as a numpy scalar, not a 0-d array
 
     # -- hooks --------------------------------------------------------------------------------
     def _default_value(self) -> Any:
@@ -112,7 +113,7 @@ class StatefulSpaceMixin:
             if np.issubdtype(self.dtype, np.integer) and not np.array_equal(cast, arr):
                 raise SpaceError(f"{name} requires {what} to be an integer within its bounds, got {short_repr(v)}")
             arr = cast
-        arr = arr[()] if arr.shape == () and not isinstance(self, gym.spaces.Box) else np.array(arr, copy=True)
+        arr = arr[()] if self._scalar_value else np.array(arr, copy=True)
         if not self._in_base(arr):
             raise SpaceError(f"{name} requires {what} inside its bounds, got {short_repr(v)}")
         return arr
@@ -169,6 +170,26 @@ class StatefulSpaceMixin:
         return super().seed(int(seed) if isinstance(seed, np.integer) else seed)  # type: ignore[misc]
 
     # -- sampling -----------------------------------------------------------------------------
+    def _sample_in_place(
+        self, selection: None, args: tuple, kwargs: dict, max_tries: int, warn_after_s: float | None
+    ) -> Any:
+        """Rejection-sample into ``self._value`` and return the accepted draw (value restored on failure).
+
+        ``selection`` is unused (the same hook on :class:`Dict` takes a sub-selection).
+        """
+        previous = self._value
+
+        def draw() -> Any:
+            self._value = self._draw(*args, **kwargs)
+            return self._value
+
+        accept = None if self.constrain_fn is None else self._satisfies
+        try:
+            return rejection_sample(self, draw, accept, max_tries, warn_after_s)
+        except BaseException:
+            self._value = previous
+            raise
+
     def sample(
         self,
         *args: Any,
@@ -185,17 +206,7 @@ class StatefulSpaceMixin:
         Raises ``RuntimeError`` when ``max_tries`` draws are all rejected.
         """
         previous = self._value
-
-        def draw() -> Any:
-            self._value = self._draw(*args, **kwargs)
-            return self._value
-
-        accept = None if self.constrain_fn is None else self._satisfies
-        try:
-            out = rejection_sample(self, draw, accept, max_tries, warn_after_s)
-        except BaseException:
-            self._value = previous
-            raise
+        out = self._sample_in_place(None, args, kwargs, max_tries, warn_after_s)
         if not set_value:
             self._value = previous
             return out
@@ -218,12 +229,12 @@ class Box(StatefulSpaceMixin, gym.spaces.Box):
     def __init__(self, *args: Any, init_value: Any = None, constrain_fn: Callable | None = None, **kwargs: Any):
         super().__init__(*args, **kwargs)
         self._fast: tuple[np.ndarray, np.ndarray] | None = None
+        self._integer = bool(np.issubdtype(self.dtype, np.integer))
         if self.is_bounded("both") and np.issubdtype(self.dtype, np.number):
             low = self.low.astype(np.float64)
             span = self.high.astype(np.float64) - low
-            integer = np.issubdtype(self.dtype, np.integer)
-            if np.all(np.isfinite(span)) and (not integer or np.all(span < _FAST_INT_SPAN)):
-                self._fast = (low, span + 1.0 if integer else span)
+            if np.all(np.isfinite(span)) and (not self._integer or np.all(span < _FAST_INT_SPAN)):
+                self._fast = (low, span + 1.0 if self._integer else span)  # integers: floor(u * (span + 1))
         self._setup_state(init_value, constrain_fn)
 
     def _default_value(self) -> np.ndarray:
@@ -231,7 +242,7 @@ class Box(StatefulSpaceMixin, gym.spaces.Box):
         lo_ok, hi_ok = np.isfinite(low), np.isfinite(high)
         with np.errstate(invalid="ignore"):
             mid = np.where(lo_ok & hi_ok, 0.5 * low + 0.5 * high, np.where(lo_ok, low, np.where(hi_ok, high, 0.0)))
-        if np.issubdtype(self.dtype, np.integer):
+        if self._integer:
             mid = np.floor(mid)
         return mid.astype(self.dtype)
 
@@ -240,7 +251,7 @@ class Box(StatefulSpaceMixin, gym.spaces.Box):
             return super()._draw(*args, **kwargs)
         low, span = self._fast
         u = self.np_random.random(self.shape)
-        if np.issubdtype(self.dtype, np.integer):
+        if self._integer:
             return np.asarray(low + np.floor(u * span), dtype=self.dtype)  # asarray keeps 0-d arrays for shape ()
         x = np.asarray(low + u * span, dtype=self.dtype)
         return np.minimum(x, self.high, out=x)  # float rounding must not step past high
@@ -263,6 +274,8 @@ class Discrete(StatefulSpaceMixin, gym.spaces.Discrete):
         value = space.sample()  # an even number, also stored in space.value
         space.reset()           # space.value is 0 again
     """
+
+    _scalar_value = True
 
     def __init__(self, *args: Any, init_value: Any = None, constrain_fn: Callable | None = None, **kwargs: Any):
         super().__init__(*args, **kwargs)
