@@ -194,6 +194,22 @@ def test_dict_constraint_receives_full_value_and_impossible_raises():
     assert space.value == {"a": 1, "n": {"b": 2}}
 
 
+def test_dict_slow_sampling_warns_once_per_call(caplog):
+    space = Dict({"a": Discrete(3)}, constrain_fn=lambda v: False)
+    with caplog.at_level(logging.WARNING, logger="stable_worldmodel.spaces"):
+        with pytest.raises(RuntimeError, match="Dict.sample"):
+            space.sample(max_tries=200, warn_after_s=0.0)
+    assert sum("rejected by constrain_fn" in r.getMessage() for r in caplog.records) == 1
+
+
+def test_value_dict_is_a_copy():
+    space = make_nested()
+    v = space.value
+    v["agent"]["color"][0] = 99
+    v["z"] = 4
+    assert space.value["z"] == 1 and space.value["agent"]["color"][0] == 10
+
+
 def test_sample_without_set_value_restores_everything():
     space = make_pusht_like()
     before = space.value
