@@ -8,6 +8,12 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import stable_worldmodel  # noqa: F401  (registers swm/... ids)
+from env_checks import (
+    assert_expert_solves_in_world,
+    assert_factor_changes_episode,
+    assert_render_size,
+    count_draws,
+)
 from stable_worldmodel import keys
 from stable_worldmodel.envs.image_positioning.env import (
     ANGLE_TOLERANCE,
@@ -145,43 +151,17 @@ def test_rotation_is_visible():
 
 @pytest.mark.parametrize("name", ImagePositioningEnv().variation_space.names())
 def test_every_factor_changes_the_episode(name):
-    env = make_env()
-    ref = rollout(env, 3)
-    env.reset(seed=3)
-    default = _get(env, name)
-    values = []
-    for seed in range(10):  # a resampled value, the farthest from the default of a few draws
-        env.reset(seed=seed, options={"variation": [name]})
-        values.append(_get(env, name))
-    value = max(values, key=lambda v: np.abs(v.astype(np.float64) - default).sum())
-    out = rollout(env, 3, {"variation_values": {name: value}})
-    assert not all(np.array_equal(x, y) for x, y in zip(ref, out)), f"factor {name} = {value} changed nothing"
-
-
-def _get(env, name):
-    v = env.variation_space.value
-    for part in name.split("."):
-        v = v[part]
-    return np.asarray(v)
+    assert_factor_changes_episode(make_env(), name, rollout)
 
 
 @pytest.mark.parametrize("size", [(64, 64), (48, 80), (224, 224)])
 def test_render_size(size):
-    env = ImagePositioningEnv(render_size=size)
-    _, info = env.reset(seed=0)
-    frame = env.render()
-    assert frame.shape == (*size, 3) and frame.dtype == np.uint8
-    assert info[keys.GOAL].shape == (*size, 3)
-    env.set_render_size((32, 40))
-    _, info = env.reset(seed=0)
-    assert env.render().shape == (32, 40, 3) and info[keys.GOAL].shape == (32, 40, 3)
+    assert_render_size(ImagePositioningEnv(render_size=size), size)
 
 
 def test_goal_image_is_the_target_arrangement_drawn_once():
     env = make_env()
-    draws = []
-    draw = env._draw
-    env._draw = lambda *a: draws.append(1) or draw(*a)
+    draws = count_draws(env)
     _, info = env.reset(seed=0)
     _, _, _, _, info2 = env.step(env.action_space.sample())
     assert len(draws) == 1
@@ -219,3 +199,8 @@ def test_expert_reads_step_sizes_when_recorded():
     exact = ImagePositioningExpert().get_action(infos)
     np.testing.assert_allclose(exact, [[1.0, 0.0, 1.0]], atol=1e-6)
     assert np.all(np.abs(default) < np.abs(exact) + 1e-6) and default[0, 0] < 1.0
+
+
+@pytest.mark.parametrize("num_envs", [1, 4])
+def test_expert_solves_episodes_in_world(num_envs):
+    assert_expert_solves_in_world("swm/ImagePositioning-v1", num_envs, episodes=4, max_episode_steps=60)

@@ -8,6 +8,12 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import stable_worldmodel  # noqa: F401  (registers swm/... ids)
+from env_checks import (
+    assert_expert_solves_in_world,
+    assert_factor_changes_episode,
+    assert_render_size,
+    count_draws,
+)
 from stable_worldmodel import keys
 from stable_worldmodel.envs.voidrun.env import DOWN, LEFT, RIGHT, UP, VoidRunEnv, shortest_path_lengths
 from stable_worldmodel.envs.voidrun.expert import VoidRunExpert
@@ -171,49 +177,17 @@ def test_same_seed_same_episode_bit_for_bit():
 
 @pytest.mark.parametrize("name", VoidRunEnv().variation_space.names())
 def test_every_factor_changes_the_episode(name):
-    env = make_env()
-    ref_frames, ref_states, ref_goal = rollout(env, 3)
-    env.reset(seed=3)
-    default = _get(env, name)
-    value = far_resample(env, name, default)
-    frames, states, goal = rollout(env, 3, {"variation_values": {name: value}})
-    changed = not (np.array_equal(frames, ref_frames) and np.array_equal(states, ref_states) and np.array_equal(goal, ref_goal))
-    assert changed, f"factor {name} = {value} (default {default}) changed nothing"
-
-
-def far_resample(env, name, default):
-    """Of a few resampled values of factor ``name``, the one farthest from ``default``."""
-    values = []
-    for seed in range(10):
-        env.reset(seed=seed, options={"variation": [name]})
-        values.append(_get(env, name))
-    return max(values, key=lambda v: np.abs(v.astype(np.float64) - default).sum())
-
-
-def _get(env, name):
-    v = env.variation_space.value
-    for part in name.split("."):
-        v = v[part]
-    return np.asarray(v)
+    assert_factor_changes_episode(make_env(), name, rollout)
 
 
 @pytest.mark.parametrize("size", [(64, 64), (48, 80), (224, 224)])
 def test_render_size(size):
-    env = VoidRunEnv(render_size=size)
-    _, info = env.reset(seed=0)
-    frame = env.render()
-    assert frame.shape == (*size, 3) and frame.dtype == np.uint8
-    assert info[keys.GOAL].shape == (*size, 3)
-    env.set_render_size((32, 40))
-    _, info = env.reset(seed=0)
-    assert env.render().shape == (32, 40, 3) and info[keys.GOAL].shape == (32, 40, 3)
+    assert_render_size(VoidRunEnv(render_size=size), size)
 
 
 def test_render_shows_breaking_and_goal_image_is_cached():
     env = make_env()
-    draws = []
-    draw = env._draw
-    env._draw = lambda *a: draws.append(1) or draw(*a)
+    draws = count_draws(env)
     _, info = env.reset(seed=0, options={"state": open_floor(agent=(3, 3)), "variation_values": {"prob_break": 1.0}})
     before = env.render()
     _, _, _, _, info2 = env.step(RIGHT)
@@ -256,3 +230,8 @@ def test_expert_is_batched_and_avoids_holes():
     actions = VoidRunExpert().get_action({keys.STATE: np.stack([s, s2])[:, None]})
     assert actions.shape == (2,)
     assert actions[0] in (LEFT, RIGHT) and actions[1] == LEFT
+
+
+@pytest.mark.parametrize("num_envs", [1, 4])
+def test_expert_solves_episodes_in_world(num_envs):
+    assert_expert_solves_in_world("swm/VoidRun-v0", num_envs, episodes=4, max_episode_steps=60)

@@ -9,19 +9,28 @@ the angle can be read from an image. The set is a pure function of ``(seed, n)``
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import numpy as np
 
 from .. import utils
 
+_TILE = np.array([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]])
 
-@dataclass(frozen=True)
+
+@dataclass(frozen=True, eq=False)
 class Sprite:
     """A tile colour plus polygons ``(K, 2)`` in tile units, each with its RGB colour."""
 
     tile_color: tuple[int, int, int]
     parts: tuple[tuple[np.ndarray, tuple[int, int, int]], ...]
+
+    @cached_property
+    def packed(self) -> tuple[np.ndarray, np.ndarray, tuple[tuple[int, int, int], ...]]:
+        """Tile and part vertices stacked ``(sum K, 2)``, the split indices, and the colours."""
+        polys = [_TILE, *(poly for poly, _ in self.parts)]
+        splits = np.cumsum([len(p) for p in polys])[:-1]
+        return np.concatenate(polys), splits, (self.tile_color, *(c for _, c in self.parts))
 
 
 def _regular_polygon(k: int, radius: float, phase: float) -> np.ndarray:
@@ -60,8 +69,6 @@ def make_sprites(seed: int, n: int) -> tuple[Sprite, ...]:
     return tuple(_sprite(rng) for _ in range(n))
 
 
-_TILE = np.array([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]])
-
 
 def draw_sprite(img: np.ndarray, sprite: Sprite, center: np.ndarray, angle: float, side: float) -> None:
     """Draw ``sprite`` into ``img`` (H, W, 3) with its centre at ``center`` (canvas units in [0, 1]).
@@ -69,11 +76,7 @@ def draw_sprite(img: np.ndarray, sprite: Sprite, center: np.ndarray, angle: floa
     ``side`` is the tile side in canvas units; ``angle`` (radians) turns the tile clockwise on
     screen.
     """
-    size = img.shape[:2]
-
-    def to_px(points: np.ndarray) -> np.ndarray:
-        return utils.world_to_pixels(utils.rotate(points * side, angle) + center, 1.0, size)
-
-    utils.fill_polygon(img, to_px(_TILE), sprite.tile_color)
-    for poly, color in sprite.parts:
-        utils.fill_polygon(img, to_px(poly), color)
+    points, splits, colors = sprite.packed
+    px = utils.world_to_pixels(utils.rotate(points * side, angle) + center, 1.0, img.shape[:2])
+    for poly, color in zip(np.split(px, splits), colors):
+        utils.fill_polygon(img, poly, color)

@@ -44,6 +44,7 @@ small ``floor.broken_color`` squares on the void, the goal a ``goal.color`` tile
 from __future__ import annotations
 
 from collections import deque
+from functools import lru_cache
 from typing import Any
 
 import gymnasium as gym
@@ -65,10 +66,21 @@ def shortest_path_lengths(mask: np.ndarray, goal: tuple[int, int]) -> np.ndarray
     ``mask`` is ``(N, N)`` indexed ``[y, x]``; ``goal`` is ``(x, y)``. Returns ``(N, N)`` int.
     """
     n = mask.shape[0]
-    dist = np.full(mask.shape, -1, np.int64)
-    gx, gy = int(goal[0]), int(goal[1])
-    if not mask[gy, gx]:
-        return dist
+    free = mask.reshape(-1).tolist()  # plain lists: far faster than numpy scalars for 64 cells
+    dist = [-1] * (n * n)
+    start = int(goal[1]) * n + int(goal[0])
+    if free[start]:
+        dist[start] = 0
+        queue = deque([start])
+        while queue:
+            i = queue.popleft()
+            y, x = divmod(i, n)
+            for j, ok in ((i - 1, x > 0), (i + 1, x < n - 1), (i + n, y < n - 1), (i - n, y > 0)):
+                if ok and free[j] and dist[j] < 0:
+                    dist[j] = dist[i] + 1
+                    queue.append(j)
+    dist = np.array(dist, np.int64).reshape(n, n)
+    return dist
     dist[gy, gx] = 0
     queue = deque([(gx, gy)])
     while queue:
@@ -271,23 +283,45 @@ class VoidRunEnv(DatasetResetMixin, gym.Env):
         v = self.variation_space.value
         n = self.grid_size
         h, w = self.render_size
-        img = utils.new_canvas((h, w), v["void"]["color"])
+        (fy, fx), (by, bx) = _band_coverage(n, h, w, _FLOOR_INSET), _band_coverage(n, h, w, _BROKEN_INSET)
+        gy, gx = _band_coverage(n, h, w, _GOAL_INSET)
+        m = mask.astype(np.float32)
+        cover = np.empty((h, w, 3), np.float32)  # coverage of floor tiles, broken tiles, goal tile
+        cover[..., 0] = fy.T @ m @ fx
+        cover[..., 1] = by.T @ (1.0 - m) @ bx
+        cover[..., 2] = np.outer(gy[self._goal[1]], gx[self._goal[0]])
+        void, floor, broken, goal = (
+            np.asarray(c, np.float32) for c in (v["void"]["color"], v["floor"]["color"], v["floor"]["broken_color"], v["goal"]["color"])
+        )
+        # floor and broken tiles lie side by side on the void; the goal tile lies inside a floor tile
+        img = cover @ np.stack([floor - void, broken - void, goal - floor]) + (void + 0.5)
+        img = img.astype(np.uint8)
         cw, ch = w / (n + 1), h / (n + 1)  # half a cell of void on every side
-
-        def tile(x: float, y: float, inset: float, color) -> None:
-            x0, y0 = (x + 0.5 + inset) * cw, (y + 0.5 + inset) * ch
-            utils.fill_rect(img, x0, y0, x0 + (1 - 2 * inset) * cw, y0 + (1 - 2 * inset) * ch, color)
-
-        for y in range(n):
-            for x in range(n):
-                if mask[y, x]:
-                    tile(x, y, 0.04, v["floor"]["color"])
-                else:
-                    tile(x, y, 0.22, v["floor"]["broken_color"])
-        tile(self._goal[0], self._goal[1], 0.1, v["goal"]["color"])
         inside = 0 <= agent[0] < n and 0 <= agent[1] < n
         fallen = not inside or not mask[agent[1], agent[0]]
         radius = float(v["agent"]["radius"]) * min(cw, ch) * (0.5 if fallen else 1.0)
-        center = ((agent[0] + 1.0) * cw, (agent[1] + 1.0) * ch)
-        utils.fill_circle(img, center, radius, v["agent"]["color"])
+        utils.fill_circle(img, ((agent[0] + 1.0) * cw, (agent[1] + 1.0) * ch), radius, v["agent"]["color"])
         return img
+
+
+_FLOOR_INSET, _BROKEN_INSET, _GOAL_INSET = 0.04, 0.22, 0.1  # tile margins, in cells
+
+
+@lru_cache(maxsize=32)
+def _band_coverage(n: int, h: int, w: int, inset: float) -> tuple[np.ndarray, np.ndarray]:
+    """Exact box-filter coverage of the tile rows/columns over pixel rows/columns.
+
+    Cell ``k`` of an ``n``-cell grid drawn with half a cell of margin spans
+    ``[(k + 0.5 + inset) * c, (k + 1.5 - inset) * c]`` pixels (``c`` = cell size). Returns
+    ``(n, H)`` and ``(n, W)`` float32 arrays; the coverage of tile ``(x, y)`` at pixel ``(i, j)``
+    is ``rows[y, i] * cols[x, j]``, so a whole mask of tiles is ``rows.T @ mask @ cols``.
+    """
+
+    def bands(size: int) -> np.ndarray:
+        c = size / (n + 1)
+        lo = (np.arange(n) + 0.5 + inset)[:, None] * c
+        hi = (np.arange(n) + 1.5 - inset)[:, None] * c
+        px = np.arange(size)[None, :]
+        return np.clip(np.minimum(hi, px + 1) - np.maximum(lo, px), 0.0, 1.0).astype(np.float32)
+
+    return bands(h), bands(w)
