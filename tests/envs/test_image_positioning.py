@@ -204,3 +204,16 @@ def test_expert_reads_step_sizes_when_recorded():
 @pytest.mark.parametrize("num_envs", [1, 4])
 def test_expert_solves_episodes_in_world(num_envs):
     assert_expert_solves_in_world("swm/ImagePositioning-v1", num_envs, episodes=4, max_episode_steps=60)
+
+
+def test_reset_from_dataset_rows_restores_state_goal_and_factors():
+    env = make_env()
+    obs, _ = env.reset(seed=5, options={"variation": ["start"]})
+    goal = np.tile(np.array([0.5, 0.5, 1.0], np.float32), 3)
+    options = env.reset_options_from_dataset(
+        {keys.STATE: obs[keys.STATE], "variation.images.seed": np.array(42)}, {keys.STATE: goal}
+    )
+    obs2, info = env.reset(seed=0, options=options)
+    np.testing.assert_allclose(obs2[keys.STATE], obs[keys.STATE], atol=1e-6)
+    np.testing.assert_allclose(info[keys.GOAL_STATE], goal, atol=1e-6)
+    assert env.variation_space.value["images"]["seed"] == 42

@@ -235,3 +235,30 @@ def test_expert_is_batched_and_avoids_holes():
 @pytest.mark.parametrize("num_envs", [1, 4])
 def test_expert_solves_episodes_in_world(num_envs):
     assert_expert_solves_in_world("swm/VoidRun-v0", num_envs, episodes=4, max_episode_steps=60)
+
+
+def test_sampled_start_and_goal_never_coincide():
+    env = make_env()
+    for seed in range(60):
+        obs, _ = env.reset(seed=seed, options={"variation": ["agent.start", "goal.position"]})
+        assert not np.array_equal(obs[keys.STATE][:2], obs[keys.STATE][2:4])
+
+
+def test_reset_from_dataset_rows_restores_state_goal_and_factors():
+    env = make_env()
+    obs, _ = env.reset(seed=5, options={"variation": ["all"]})
+    start_row = {keys.STATE: obs[keys.STATE], "variation.agent.color": np.array([1, 2, 3], np.uint8)}
+    goal_row = {keys.STATE: open_floor(agent=(4, 6))}
+    options = env.reset_options_from_dataset(start_row, goal_row)
+    obs2, info = env.reset(seed=0, options=options)
+    np.testing.assert_array_equal(obs2[keys.STATE][:2], obs[keys.STATE][:2])
+    np.testing.assert_array_equal(obs2[keys.STATE][4:], obs[keys.STATE][4:])
+    np.testing.assert_array_equal(info[keys.GOAL_PROPRIO], [4, 6])
+    np.testing.assert_array_equal(env.variation_space.value["agent"]["color"], [1, 2, 3])
+
+
+def test_start_set_onto_the_goal_succeeds_at_the_first_step():
+    env = make_env()
+    env.reset(seed=0, options={"variation_values": {"agent.start": [3, 3], "goal.position": [3, 3]}})
+    _, reward, terminated, truncated, _ = env.step(LEFT)
+    assert (terminated, truncated) == (True, False)

@@ -2,8 +2,8 @@
 
 Rules
 -----
-- The world is a ``grid_size`` x ``grid_size`` grid of floor cells (constructor argument >= 4, default 8)
-  floating in the void. Cells are written ``(x, y)`` = (column, row); ``y`` grows downwards, as in
+- The world is a ``grid_size`` x ``grid_size`` grid of floor cells (constructor argument >= 4,
+  default 8; not a factor, since it sets the shape of ``state``) floating in the void. Cells are written ``(x, y)`` = (column, row); ``y`` grows downwards, as in
   the image.
 - Actions are ``Discrete(4)``: ``0`` LEFT (x - 1), ``1`` RIGHT (x + 1), ``2`` DOWN (y + 1),
   ``3`` UP (y - 1). Every action moves the agent by one cell; there is no "stay".
@@ -34,11 +34,13 @@ Factors of variation (``variation_space``)
 ------------------------------------------
 ``prob_break``; ``floor.holes``, ``floor.color``, ``floor.broken_color``; ``void.color``;
 ``agent.start``, ``agent.color``, ``agent.radius`` (fraction of a cell); ``goal.position``,
-``goal.color``. Start and goal are never sampled onto the same cell.
+``goal.color``. Start and goal are never sampled onto the same cell (a start *set* onto the goal
+with ``variation_values`` gives an episode that succeeds at its first step).
 
-Rendering draws anti-aliased tiles directly at ``render_size`` (default 224x224): the grid fills
-the frame with half a cell of void around it; intact cells are ``floor.color`` tiles, missing ones
-small ``floor.broken_color`` squares on the void, the goal a ``goal.color`` tile, the agent a disk.
+Rendering draws directly at ``render_size`` (default 224x224), anti-aliased (tiles by their exact
+pixel coverage, the agent with ``envs.utils``): the grid fills the frame with half a cell of void
+around it; intact cells are ``floor.color`` tiles, missing ones small ``floor.broken_color``
+squares on the void, the goal a ``goal.color`` tile, the agent a disk.
 """
 
 from __future__ import annotations
