@@ -41,9 +41,9 @@ def open_h5(path: str | os.PathLike):
 
     if _superblock.needs_repair(path):
         try:
-            return h5py.File(path, "r", libver="latest", swmr=True, locking=False)
-        except OSError:
             _superblock.repair(path)
+        except OSError:  # read-only file: SWMR read still works
+            logger.warning("%s is flagged open for write and could not be repaired", path)
     attempts = (dict(libver="latest", swmr=True, locking=False), dict(), dict(locking=False))
     for i, kwargs in enumerate(attempts):
         try:

@@ -1,0 +1,210 @@
+"""Cache management and metadata: datasets, model checkpoints, worlds."""
+
+from __future__ import annotations
+
+import functools
+import logging
+import re
+import shutil
+from pathlib import Path
+from typing import Any, TypedDict
+
+import numpy as np
+
+from .. import keys
+from ..errors import ConfigError, did_you_mean, unknown_name
+from .utils import get_cache_dir
+
+logger = logging.getLogger(__name__)
+
+_MODEL_FILE = re.compile(r"^(?P<name>.+?)(?:_weights.*|_object)\.ckpt$")
+
+
+class SpaceInfo(TypedDict, total=False):
+    """Metadata of a Gymnasium space."""
+
+    shape: tuple[int, ...]
+    type: str
+    dtype: str
+    low: Any
+    high: Any
+    n: int
+
+
+class VariationInfo(TypedDict):
+    """Factors of variation of a world."""
+
+    has_variation: bool
+    type: str | None
+    names: list[str] | None
+
+
+class WorldInfo(TypedDict):
+    """Metadata of a world (registered environment)."""
+
+    name: str
+    observation_space: SpaceInfo
+    action_space: SpaceInfo
+    variation: VariationInfo
+    config: dict[str, Any]
+
+
+def is_image(x: Any) -> bool:
+    """True for a uint8 numpy array ``(H, W, C)`` with C in 1, 3, 4."""
+    return isinstance(x, np.ndarray) and x.dtype == np.uint8 and x.ndim == 3 and x.shape[-1] in (1, 3, 4)
+
+
+# -- datasets ----------------------------------------------------------------------------------
+def list_datasets() -> list[str]:
+    """Names of the datasets in the cache: ``<name>.h5`` files and folder/video directories."""
+    from .folder import META
+
+    root = get_cache_dir()
+    names = {p.stem for p in root.glob("*.h5")} | {p.parent.name for p in root.glob(f"*/{META}")}
+    return sorted(names)
+
+
+def _dataset_path(name: str) -> Path:
+    root = get_cache_dir()
+    for path in (root / f"{name}.h5", root / name):
+        if path.exists():
+            return path
+    raise ConfigError(f"dataset_info requires a dataset in {root}, got {name!r}.{did_you_mean(name, list_datasets())}")
+
+
+def dataset_info(name: str) -> dict[str, Any]:
+    """Metadata of cached dataset ``name``: name, path, format, num_episodes, num_steps,
+    columns, obs_shape, action_shape, goal_shape, variation, episode lengths summary."""
+    path = _dataset_path(name)
+    if path.suffix == ".h5":
+        from .hdf5 import HDF5Dataset
+
+        ds = HDF5Dataset(path)
+        fmt = "hdf5"
+    else:
+        from .folder import FolderDataset
+        from .video_dataset import VideoDataset
+
+        fmt = "video" if (path / "columns.npz").exists() and any(path.glob("*/episode_*.mp4")) else "folder"
+        ds = VideoDataset(path) if fmt == "video" else FolderDataset(path)
+
+    def shape(col: str) -> tuple[int, ...] | None:
+        return tuple(ds.get_row_data(0)[col].shape) if col in ds.column_names and ds.num_rows else None
+
+    variations = sorted(c[len(keys.VARIATION) + 1 :] for c in ds.column_names if c.startswith(keys.VARIATION + "."))
+    lengths = np.asarray(ds.lengths)
+    return {
+        "name": name,
+        "path": str(path),
+        "format": fmt,
+        "num_episodes": int(ds.num_episodes),
+        "num_steps": int(ds.num_rows),
+        "columns": ds.column_names,
+        "obs_shape": shape(keys.PIXELS),
+        "action_shape": shape(keys.ACTION),
+        "goal_shape": shape(keys.GOAL),
+        "episode_length": {
+            "min": int(lengths.min()) if lengths.size else 0,
+            "max": int(lengths.max()) if lengths.size else 0,
+            "mean": float(lengths.mean()) if lengths.size else 0.0,
+        },
+        "variation": {"has_variation": bool(variations), "names": variations},
+    }
+
+
+def delete_dataset(name: str) -> Path:
+    """Delete cached dataset ``name`` (its ``.h5`` file or directory); returns the removed path."""
+    root = get_cache_dir()
+    for path in (root / f"{name}.h5", root / name):
+        if path.is_file():
+            path.unlink()
+            logger.info("Deleted dataset %s", path)
+            return path
+        if path.is_dir():
+            shutil.rmtree(path)
+            logger.info("Deleted dataset %s", path)
+            return path
+    raise unknown_name("dataset", name, list_datasets())
+
+
+# -- models ------------------------------------------------------------------------------------
+def _model_files() -> dict[str, list[Path]]:
+    out: dict[str, list[Path]] = {}
+    for path in get_cache_dir().rglob("*.ckpt"):
+        match = _MODEL_FILE.match(path.name)
+        if match:
+            out.setdefault(match["name"], []).append(path)
+    return out
+
+
+def list_models() -> list[str]:
+    """Names of cached checkpoints (``<name>_weights*.ckpt`` or ``<name>_object.ckpt``), sorted."""
+    return sorted(_model_files())
+
+
+def delete_model(name: str) -> list[Path]:
+    """Delete every checkpoint file of model ``name``; returns the removed paths."""
+    files = _model_files().get(name)
+    if not files:
+        raise unknown_name("model", name, list_models())
+    for path in files:
+        path.unlink()
+        logger.info("Deleted %s", path)
+    return files
+
+
+# -- worlds ------------------------------------------------------------------------------------
+def list_worlds() -> list[str]:
+    """Registered ``swm/...`` world ids, sorted."""
+    from ..envs._registry import list_envs
+
+    return sorted(list_envs())
+
+
+def space_info(space: Any) -> SpaceInfo:
+    """:class:`SpaceInfo` of a Gymnasium space."""
+    info: SpaceInfo = {"type": type(space).__name__, "shape": tuple(getattr(space, "shape", None) or ())}
+    dtype = getattr(space, "dtype", None)
+    if dtype is not None:
+        info["dtype"] = str(dtype)
+    for attr in ("low", "high"):
+        if hasattr(space, attr):
+            info[attr] = np.asarray(getattr(space, attr)).tolist()
+    if hasattr(space, "n"):
+        info["n"] = np.asarray(space.n).tolist()
+    if hasattr(space, "spaces") and isinstance(space.spaces, dict):
+        info["spaces"] = {k: space_info(v) for k, v in space.spaces.items()}  # type: ignore[typeddict-unknown-key]
+    return info
+
+
+@functools.lru_cache(maxsize=64)
+def _world_info(name: str, image_shape: tuple[int, int], render_mode: str) -> WorldInfo:
+    import gymnasium as gym
+
+    if name not in list_worlds():
+        raise ConfigError(f"world_info requires a registered world, got {name!r}.{did_you_mean(name, list_worlds())}")
+    env = gym.make(name, render_mode=render_mode)
+    try:
+        base = env.unwrapped
+        if hasattr(base, "set_render_size"):
+            base.set_render_size(image_shape)
+        space = getattr(base, "variation_space", None)
+        variation: VariationInfo = {
+            "has_variation": space is not None,
+            "type": type(space).__name__ if space is not None else None,
+            "names": list(space.names()) if space is not None and hasattr(space, "names") else None,
+        }
+        return {
+            "name": name,
+            "observation_space": space_info(env.observation_space),
+            "action_space": space_info(env.action_space),
+            "variation": variation,
+            "config": {"image_shape": tuple(image_shape), "render_mode": render_mode, "max_episode_steps": env.spec.max_episode_steps if env.spec else None},
+        }
+    finally:
+        env.close()
+
+
+def world_info(name: str, *, image_shape: tuple[int, int] = (224, 224), render_mode: str = "rgb_array") -> WorldInfo:
+    """Spaces and variation factors of world ``name`` (the env is built once; results are cached)."""
+    return _world_info(name, tuple(int(s) for s in image_shape), render_mode)
