@@ -23,6 +23,8 @@ def stack_dicts(items: Sequence[dict[str, Any]]) -> dict[str, np.ndarray]:
     """
     if not items:
         return {}
+    if len(items) == 1:  # one env: a view with a leading axis, no copy
+        return {name: np.asarray(value)[None] for name, value in items[0].items()}
     names: dict[str, None] = {}
     for item in items:
         names.update(dict.fromkeys(item))

@@ -87,9 +87,29 @@ def _stack_obs(obs: list) -> Any:
     return np.stack([np.asarray(o) for o in obs])
 
 
+def _pack(writer, cmd: str, result: Any) -> Any:
+    """Route the large arrays of a reset/step result through shared memory."""
+    if cmd == "reset":
+        return (writer.pack(0, result[0]), writer.pack(1, result[1]))
+    if cmd == "step":
+        return (writer.pack(2, result[0]), *result[1:4], writer.pack(3, result[4]))
+    return result
+
+
+def _unpack(reader, cmd: str, result: Any) -> Any:
+    if cmd == "reset":
+        return (reader.unpack(result[0]), reader.unpack(result[1]))
+    if cmd == "step":
+        return (reader.unpack(result[0]), *result[1:4], reader.unpack(result[4]))
+    return result
+
+
 def _worker(conn, factory_bytes: bytes, n: int) -> None:
     import cloudpickle
 
+    from .shm import ShmWriter
+
+    writer = ShmWriter()
     try:
         group = EnvGroup(cloudpickle.loads(factory_bytes), n)
         conn.send(("ok", cloudpickle.dumps(group.spaces())))
@@ -104,12 +124,14 @@ def _worker(conn, factory_bytes: bytes, n: int) -> None:
             break
         if cmd == "close":
             group.close()
+            writer.close()
             conn.send(("ok", None))
             break
         try:
-            conn.send(("ok", getattr(group, cmd)(*payload)))
+            conn.send(("ok", _pack(writer, cmd, getattr(group, cmd)(*payload))))
         except BaseException:
             conn.send(("error", traceback.format_exc()))
+    writer.close()
     conn.close()
 
 
@@ -163,6 +185,9 @@ class VecEnv:
     def _start_workers(self, factory, n_workers: int) -> None:
         import cloudpickle
 
+        from .shm import ShmReader
+
+        self._reader = ShmReader()
         payload = cloudpickle.dumps(factory)
         bounds = np.linspace(0, self.num_envs, n_workers + 1).round().astype(int)
         self._slices = [(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])]
@@ -199,7 +224,7 @@ class VecEnv:
             if payload is not None:
                 conn.send((cmd, payload))
                 sent.append(conn)
-        return [self._recv(conn) for conn in sent]
+        return [_unpack(self._reader, cmd, self._recv(conn)) for conn in sent]
 
     def _split(self, env_ids: Sequence[int], *columns: Sequence) -> list[tuple | None]:
         """Group per-env arguments by worker: ``[(local_ids, col1, col2, ...) | None, ...]``."""
@@ -299,6 +324,7 @@ class VecEnv:
             proc.join(timeout=2)
             if proc.is_alive():
                 proc.terminate()
+        self._reader.close()
 
     def __del__(self):
         try:

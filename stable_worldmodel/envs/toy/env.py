@@ -108,7 +108,7 @@ class ToyEnv(DatasetResetMixin, gym.Env):
         if self._goal_img is None:  # the goal image only changes on reset
             self._goal_img = self._draw(self._goal, show_goal=False)
         return {
-            keys.GOAL: self._goal_img,
+            keys.GOAL: self._goal_img.copy(),  # check_env rejects infos that share arrays
             keys.GOAL_STATE: self._goal.copy(),
             keys.GOAL_PROPRIO: self._goal.copy(),
         }
