@@ -1,0 +1,57 @@
+"""Scripted expert of ``swm/TwoRoom-v1``: straight to the goal, through the best door when it is in the other room."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ... import keys
+from ...policy import ExpertPolicy
+from .env import MAX_DOORS, RADIUS_RANGE, SPEED_RANGE
+
+_R = RADIUS_RANGE[1]  # the expert does not see the radius: it plans for the largest one
+_MARGIN = 0.25
+
+
+class TwoRoomExpert(ExpertPolicy):
+    """Batched door-seeking controller reading the layout from the state (no privileged access).
+
+    From ``infos[state][:, -1]`` (B, 10) and ``infos[goal_state][:, -1]`` (B, 10): when the
+    goal is across the wall, pick the open door minimising the path length through its
+    centre, move in front of it until aligned with the gap, then cross; otherwise go to the
+    goal. Proportional control with gain ``1 / max speed`` never overshoots a waypoint.
+    ``noise`` adds Gaussian noise of that std to the bounded action (seeded by ``seed``) for data diversity.
+    Returns actions (B, 2) in ``[-1, 1]``.
+    """
+
+    def __init__(self, env_id: str = "swm/TwoRoom-v1", noise: float = 0.0, seed: int | None = None, **kwargs: Any):
+        super().__init__(env_id=env_id, noise=noise, seed=seed, **kwargs)
+        self.rng = np.random.default_rng(seed)
+
+    def get_action(self, infos: dict[str, np.ndarray], **kwargs: Any) -> np.ndarray:
+        state = np.asarray(infos[keys.STATE], np.float64)[:, -1]
+        goal = np.asarray(infos[keys.GOAL_STATE], np.float64)[:, -1, :2]
+        target = np.array([self._target(s, g) for s, g in zip(state, goal, strict=True)]).reshape(-1, 2)
+        action = (target - state[:, :2]) / SPEED_RANGE[1]
+        action = np.clip(action, -1.0, 1.0)
+        if self.noise:  # perturbs the bounded action, so saturated commands still vary
+            action = np.clip(action + self.noise * self.rng.standard_normal(action.shape), -1.0, 1.0)
+        return action.astype(np.float32)
+
+    @staticmethod
+    def _target(state: np.ndarray, goal: np.ndarray) -> np.ndarray:
+        pos, wall_x, half_t = state[:2], state[2], state[3]
+        side, goal_side = np.sign(pos[0] - wall_x), np.sign(goal[0] - wall_x)
+        doors = state[4 : 4 + 2 * MAX_DOORS].reshape(MAX_DOORS, 2)
+        doors = doors[doors[:, 1] > _R]
+        if side == goal_side or side == 0 or not len(doors):
+            return goal
+        centres = np.stack([np.full(len(doors), wall_x), doors[:, 0]], 1)
+        cost = np.linalg.norm(centres - pos, axis=1) + np.linalg.norm(centres - goal, axis=1)
+        k = int(np.argmin(cost))
+        centre_y, half_h = doors[k]
+        clear = half_t + _R + 1.0
+        if abs(pos[1] - centre_y) < half_h - _R - _MARGIN:  # aligned with the gap: cross
+            return np.array([wall_x + goal_side * clear, centre_y])
+        return np.array([wall_x - side * clear, centre_y])  # line up in front of the door
