@@ -101,6 +101,7 @@ def test_state_option_restores_position_and_layout():
     env = make_env()
     obs, info = env.reset(seed=5, options={"variation": ["wall", "door"]})
     state, goal_state = obs[keys.STATE], info[keys.GOAL_STATE]
+    assert not np.allclose(state[2:], [32, 2, 32, 6, 0, 0, 0, 0])  # not the default geometry
     fresh = make_env()
     obs2, info2 = fresh.reset(seed=99, options={"state": state, "goal_state": goal_state})
     np.testing.assert_allclose(obs2[keys.STATE], state, atol=1e-5)
@@ -124,3 +125,9 @@ def test_expert_reaches_the_goal(options):
 
 
 
+
+
+def test_position_only_state_keeps_the_default_geometry():
+    env = make_env()
+    obs, _ = env.reset(seed=0, options={"state": np.array([12.0, 20.0], np.float32)})
+    np.testing.assert_array_equal(obs[keys.STATE], [12, 20, 32, 2, 32, 6, 0, 0, 0, 0])

@@ -135,7 +135,7 @@ class TwoRoomEnv(PointEnv):
 
     def _setup(self, state: np.ndarray | None) -> None:
         """Free area, wall pieces (between door gaps) as grown boxes, and the layout part of the state."""
-        if state is not None:
+        if state is not None and len(state) >= STATE_DIM:
             self._set_layout_factors(state)
         r = float(self._factor("agent", "radius"))
         wx, ht = float(self._factor("wall", "position")), float(self._factor("wall", "thickness")) / 2
