@@ -349,3 +349,15 @@ def test_expert_success_rate_100_seeds():
 
 def test_angle_tolerance_constant():
     assert ANGLE_TOLERANCE == pytest.approx(np.pi / 9)
+
+
+def test_works_in_world_with_the_registered_expert():
+    world_mod = pytest.importorskip("stable_worldmodel.world")
+    world = world_mod.World(
+        "swm/PushT-v1", num_envs=2, image_shape=(64, 64), max_episode_steps=300, verbose=0, vectorization_mode="sync"
+    )
+    world.set_policy(expert_policy("swm/PushT-v1"))
+    world.reset(seed=0)
+    assert world.infos[keys.STATE].shape[::2] == (2, 7) and world.infos[keys.GOAL].shape[-3:] == (64, 64, 3)
+    result = world.evaluate(episodes=2, seed=0)
+    assert result["success_rate"] >= 50.0
