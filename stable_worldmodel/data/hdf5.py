@@ -3,9 +3,9 @@
 Reads are contiguous row slices. Each column is read in blocks aligned to its HDF5 chunks
 and the last few decoded blocks are kept (a small per-column LRU), so consecutive or nearby
 windows cost a numpy slice instead of an HDF5 call and a decompression. The file is opened
-lazily, once per process (DataLoader workers each open their own handle), in SWMR read
-mode so a file that is still being recorded can be read: only committed episodes
-(``ep_len`` / ``ep_offset``) are visible.
+lazily, once per process (DataLoader workers each open their own handle); a file that is
+still being recorded can be read: only committed episodes (``ep_len`` / ``ep_offset``)
+are visible.
 """
 
 from __future__ import annotations
@@ -27,15 +27,16 @@ from .utils import resolve_dataset_path
 
 logger = logging.getLogger(__name__)
 
-BLOCK_BYTES = 1 << 20  # target decoded bytes per cached block
-BLOCKS_PER_COLUMN = 8
+BLOCK_BYTES = 1 << 20  # decoded bytes per cached block of a small-row column
+CACHE_BYTES = 64 << 20  # decoded bytes kept per column and process
 
 
 def open_h5(path: str | os.PathLike):
-    """Open ``path`` read-only: SWMR read (works while it is written), plain as a fallback.
+    """Open ``path`` read-only, as plain ``h5py.File(path)`` does, SWMR read as a fallback.
 
-    A file already open in this process is shared by HDF5 only with the same flags, so the
-    plain modes are tried too; a file left flagged by a killed writer is repaired first.
+    The writer seals the file after every commit, so plain opens work while it records; HDF5
+    shares a file already open in this process only with the same flags, hence the order. A
+    file left flagged by a killed writer is repaired first.
     """
     import h5py
 
@@ -44,7 +45,7 @@ def open_h5(path: str | os.PathLike):
             _superblock.repair(path)
         except OSError:  # read-only file: SWMR read still works
             logger.warning("%s is flagged open for write and could not be repaired", path)
-    attempts = (dict(libver="latest", swmr=True, locking=False), dict(), dict(locking=False))
+    attempts = (dict(), dict(libver="latest", swmr=True, locking=False), dict(locking=False))
     for i, kwargs in enumerate(attempts):
         try:
             return h5py.File(path, "r", **kwargs)
@@ -103,6 +104,10 @@ class HDF5Dataset(Dataset):
         self._columns = [k for k, v in f.items() if isinstance(v, h5py.Dataset) and k not in (keys.EP_LEN, keys.EP_OFFSET)]
         self._shapes = {k: (tuple(f[k].shape[1:]), f[k].dtype) for k in self._columns}
         self._block_rows = {k: self._choose_block(f[k]) for k in self._columns}
+        self._max_blocks = {
+            k: max(8, CACHE_BYTES // max(self._block_rows[k] * f[k].dtype.itemsize * int(np.prod(f[k].shape[1:])), 1))
+            for k in self._columns
+        }
         if keys_to_load is not None:
             self.check_keys(keys_to_load)
         self._cache: dict[str, np.ndarray] = {}
@@ -134,8 +139,11 @@ class HDF5Dataset(Dataset):
 
     @staticmethod
     def _choose_block(dset) -> int:
+        """Rows per cached block: one HDF5 chunk for big rows (images), about 1 MiB otherwise."""
         chunk = dset.chunks[0] if dset.chunks else 1
         row_bytes = max(int(np.prod(dset.shape[1:], dtype=np.int64)) * dset.dtype.itemsize, 1)
+        if row_bytes * chunk >= BLOCK_BYTES // 16:
+            return chunk
         return max(chunk, (BLOCK_BYTES // row_bytes) // chunk * chunk)
 
     # -- Dataset interface --------------------------------------------------------------------
@@ -161,11 +169,14 @@ class HDF5Dataset(Dataset):
         if cached is not None:
             return cached[start:stop]
         size = self._block_rows[col]
-        b0, b1 = start // size, (stop - 1) // size if stop > start else start // size
-        if b0 != b1 or stop <= start:  # spans blocks (or empty): one direct read
+        if stop <= start:
             return self._handle()[col][start:stop]
-        block = self._block(col, b0, size)
-        return block[start - b0 * size : stop - b0 * size]
+        b0, b1 = start // size, (stop - 1) // size
+        if b1 - b0 > 2:  # a long range: one direct read
+            return self._handle()[col][start:stop]
+        parts = [self._block(col, b, size) for b in range(b0, b1 + 1)]
+        rows = parts[0] if len(parts) == 1 else np.concatenate(parts)
+        return rows[start - b0 * size : stop - b0 * size]
 
     def _block(self, col: str, b: int, size: int) -> np.ndarray:
         f = self._handle()
@@ -174,7 +185,7 @@ class HDF5Dataset(Dataset):
         if block is None:
             block = f[col][b * size : (b + 1) * size]
             lru[b] = block
-            if len(lru) > BLOCKS_PER_COLUMN:
+            if len(lru) > self._max_blocks[col]:
                 lru.popitem(last=False)
         else:
             lru.move_to_end(b)

@@ -1,0 +1,68 @@
+"""Dataset benchmark: record_dataset rows/s and bytes/row, HDF5Dataset samples/s (num_steps=4).
+
+    python bench/bench_data.py [--env swm/PushT-v1] [--episodes 20] [--num-envs 4] [--size 64]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--env", default="swm/PushT-v1")
+    parser.add_argument("--episodes", type=int, default=20)
+    parser.add_argument("--num-envs", type=int, default=4)
+    parser.add_argument("--steps", type=int, default=50, help="max_episode_steps")
+    parser.add_argument("--size", type=int, default=64)
+    parser.add_argument("--samples", type=int, default=2000)
+    args = parser.parse_args()
+
+    import torch
+
+    from stable_worldmodel import World
+    from stable_worldmodel.data import HDF5Dataset
+    from stable_worldmodel.policy import RandomPolicy
+
+    tmp = Path(tempfile.mkdtemp())
+    world = World(args.env, num_envs=args.num_envs, image_shape=(args.size, args.size), max_episode_steps=args.steps, verbose=0)
+    world.set_policy(RandomPolicy(seed=0))
+    t0 = time.perf_counter()
+    path = world.record_dataset("bench", episodes=args.episodes, seed=0, cache_dir=tmp)
+    elapsed = time.perf_counter() - t0
+    ds = HDF5Dataset(path, num_steps=4)
+    rows = ds.num_rows
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        payload = sum(f[k].id.get_storage_size() for k in f)
+        raw = sum(f[k].size * f[k].dtype.itemsize for k in f)
+    print(f"record_rows_per_s {rows / elapsed:.0f} rows/s ({rows} rows, {args.env}, {args.num_envs} envs, {args.size}px)")
+    print(f"file_bytes_per_row {os.path.getsize(path) / rows:.0f} (payload {payload / rows:.0f}, uncompressed {raw / rows:.0f})")
+
+    rng = np.random.default_rng(0)
+    idx = rng.integers(0, len(ds), args.samples)
+    t0 = time.perf_counter()
+    for i in idx:
+        ds[int(i)]
+    print(f"getitem_samples_per_s {args.samples / (time.perf_counter() - t0):.0f} (random order, all columns)")
+    for workers in (0, 2):
+        loader = torch.utils.data.DataLoader(ds, batch_size=32, shuffle=True, num_workers=workers)
+        t0 = time.perf_counter()
+        n = 0
+        for batch in loader:
+            n += len(next(iter(batch.values())))
+            if n >= args.samples:
+                break
+        print(f"dataloader_w{workers}_samples_per_s {n / (time.perf_counter() - t0):.0f}")
+    world.close()
+
+
+if __name__ == "__main__":
+    main()
