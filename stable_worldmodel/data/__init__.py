@@ -6,8 +6,9 @@ class or a function that needs them is first used (PEP 562 lazy attributes).
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from .._lazy import lazy_getattr
 
 from .utils import get_cache_dir
 
@@ -42,12 +43,7 @@ _ATTRS: dict[str, str] = {
 __all__ = ["get_cache_dir", *_ATTRS]
 
 
-def __getattr__(name: str) -> Any:
-    if name not in _ATTRS:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{_ATTRS[name]}"), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_getattr(__name__, {name: f".{module}" for name, module in _ATTRS.items()})
 
 
 def __dir__() -> list[str]:

@@ -29,28 +29,31 @@ _ENTRIES: dict[str, EnvEntry] = {}
 
 _P = "stable_worldmodel.envs"
 BUILTIN: tuple[EnvEntry, ...] = (
-    EnvEntry("swm/Toy-v0", f"{_P}.toy.env:ToyEnv", ("toy", "continuous"), f"{_P}.toy.env:ToyExpert"),
-    EnvEntry("swm/PushT-v1", f"{_P}.pusht.env:PushT", ("paper", "continuous", "pymunk"), f"{_P}.pusht.expert:PushTExpert"),
+    EnvEntry("swm/Toy-v0", f"{_P}.toy.env:ToyEnv", ("toy", "continuous"), f"{_P}.toy.env:ToyExpert", max_episode_steps=100),
+    EnvEntry("swm/PushT-v1", f"{_P}.pusht.env:PushT", ("paper", "continuous", "pymunk"), f"{_P}.pusht.expert:PushTExpert", max_episode_steps=300),
     EnvEntry(
         "swm/PushT-Discrete-v1",
         f"{_P}.pusht.env:PushTDiscrete",
         ("discrete", "pymunk"),
         f"{_P}.pusht.expert:PushTDiscreteExpert",
+        max_episode_steps=300,
     ),
-    EnvEntry("swm/TwoRoom-v1", f"{_P}.two_room.env:TwoRoomEnv", ("paper", "continuous"), f"{_P}.two_room.expert:TwoRoomExpert"),
+    EnvEntry("swm/TwoRoom-v1", f"{_P}.two_room.env:TwoRoomEnv", ("paper", "continuous"), f"{_P}.two_room.expert:TwoRoomExpert", max_episode_steps=100),
     EnvEntry(
         "swm/SimplePointMaze-v0",
         f"{_P}.simple_point_maze.env:SimplePointMazeEnv",
         ("continuous",),
         f"{_P}.simple_point_maze.expert:SimplePointMazeExpert",
+        max_episode_steps=150,
     ),
     EnvEntry(
         "swm/ImagePositioning-v1",
         f"{_P}.image_positioning.env:ImagePositioningEnv",
         ("continuous",),
         f"{_P}.image_positioning.expert:ImagePositioningExpert",
+        max_episode_steps=100,
     ),
-    EnvEntry("swm/VoidRun-v0", f"{_P}.voidrun.env:VoidRunEnv", ("discrete",), f"{_P}.voidrun.expert:VoidRunExpert"),
+    EnvEntry("swm/VoidRun-v0", f"{_P}.voidrun.env:VoidRunEnv", ("discrete",), f"{_P}.voidrun.expert:VoidRunExpert", max_episode_steps=100),
 )
 
 

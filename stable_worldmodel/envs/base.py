@@ -95,7 +95,7 @@ def apply_variation_options(variation_space, options: Mapping[str, Any] | None, 
         variation_space.update(set(requested))
     values = options.get(keys.VARIATION_VALUES)
     if values:
-        flat = _flatten(values)
+        flat = flatten_values(values)
         for name in flat:
             if name not in names:
                 raise unknown_name("variation factor", name, names)
@@ -103,12 +103,13 @@ def apply_variation_options(variation_space, options: Mapping[str, Any] | None, 
     return variation_space.value
 
 
-def _flatten(d: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+def flatten_values(d: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    """Flatten nested reset-option values to dotted names (``{"a": {"b": 1}}`` -> ``{"a.b": 1}``)."""
     out: dict[str, Any] = {}
     for k, v in d.items():
         path = f"{prefix}{k}"
         if isinstance(v, Mapping):
-            out.update(_flatten(v, path + "."))
+            out.update(flatten_values(v, path + "."))
         else:
             out[path] = v
     return out

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from .. import keys
-from .base import _flatten
+from .base import flatten_values
 
 _EPS = 1e-9
 
@@ -136,4 +136,4 @@ def push_out(pos: np.ndarray, boxes: np.ndarray, lo: np.ndarray, hi: np.ndarray,
 def given_factors(options: Mapping[str, Any] | None) -> set[str]:
     """Dotted names of the factors that reset ``options`` set through ``"variation_values"``."""
     values = (options or {}).get(keys.VARIATION_VALUES) or {}
-    return set(_flatten(values))
+    return set(flatten_values(values))

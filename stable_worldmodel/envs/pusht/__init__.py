@@ -5,8 +5,7 @@ Names resolve lazily, so importing this package imports neither pymunk nor OpenC
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from ..._lazy import lazy_getattr
 
 __all__ = ["PushT", "PushTDiscrete", "PushTDiscreteExpert", "PushTExpert"]
 
@@ -17,10 +16,4 @@ _LAZY = {
     "PushTDiscreteExpert": ".expert",
 }
 
-
-def __getattr__(name: str) -> Any:
-    if name in _LAZY:
-        value = getattr(importlib.import_module(_LAZY[name], __name__), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_getattr(__name__, _LAZY)

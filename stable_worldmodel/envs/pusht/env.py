@@ -41,7 +41,7 @@ import numpy as np
 
 from ... import keys
 from ...errors import ConfigError
-from ..base import DatasetResetMixin, _flatten, apply_variation_options
+from ..base import DatasetResetMixin, flatten_values, apply_variation_options
 from .physics import CONTROL_HZ, WINDOW, PushTPhysics, body_state, set_pose
 from .render import draw_scene
 from .shapes import SHAPES, SYMMETRY, ShapeSpec, angle_error, shape_spec, to_world
@@ -152,7 +152,7 @@ class PushT(DatasetResetMixin, PushTPhysics, gym.Env):
         v = self.variation_space.value
         agent_spec = shape_spec(SHAPES[int(v["agent"]["shape"])], AGENT_UNIT * float(v["agent"]["scale"]))
         block_spec = shape_spec(SHAPES[int(v["block"]["shape"])], BLOCK_UNIT * float(v["block"]["scale"]))
-        given = set(_flatten(options.get(keys.VARIATION_VALUES) or {}))
+        given = set(flatten_values(options.get(keys.VARIATION_VALUES) or {}))
         draw_seeded(self.variation_space, given, agent_spec, block_spec, self.np_random)
         v = self._values = self.variation_space.value  # read by _draw (reading the space is slow)
         goal_spec = shape_spec(block_spec.name, block_spec.unit * float(v["goal"]["scale"]))

@@ -2,14 +2,9 @@
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from ..._lazy import lazy_getattr
 
 __all__ = ["SimplePointMazeEnv", "SimplePointMazeExpert"]
 _WHERE = {"SimplePointMazeEnv": ".env", "SimplePointMazeExpert": ".expert"}
 
-
-def __getattr__(name: str) -> Any:
-    if name in _WHERE:
-        return getattr(importlib.import_module(_WHERE[name], __name__), name)
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = lazy_getattr(__name__, _WHERE)

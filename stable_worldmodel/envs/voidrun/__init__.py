@@ -5,14 +5,9 @@ The classes are resolved lazily so that importing this package draws in nothing 
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from ..._lazy import lazy_getattr
 
 __all__ = ["VoidRunEnv", "VoidRunExpert"]
 _WHERE = {"VoidRunEnv": ".env", "VoidRunExpert": ".expert"}
 
-
-def __getattr__(name: str) -> Any:
-    if name not in _WHERE:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    return getattr(importlib.import_module(_WHERE[name], __name__), name)
+__getattr__ = lazy_getattr(__name__, _WHERE)
