@@ -118,8 +118,14 @@ class RandomPolicy(BasePolicy):
 
     def set_env(self, env: Any) -> None:
         super().set_env(env)
+        space = env.action_space
+        # a bounded float Box is sampled directly from the space's generator: the same draws
+        # as Box.sample(), without its per-call bookkeeping
+        self._uniform_box = (
+            type(space).__name__ == "Box" and np.dtype(space.dtype).kind == "f" and bool(space.is_bounded("both"))
+        )
         if self.seed is not None:
-            env.action_space.seed(self.seed)
+            space.seed(self.seed)
 
     def set_seed(self, seed: int | None) -> None:
         self.seed = seed
@@ -127,7 +133,10 @@ class RandomPolicy(BasePolicy):
             self.env.action_space.seed(seed)
 
     def get_action(self, obs: Any, **kwargs: Any) -> Any:
-        return self._require_env().action_space.sample()
+        space = self._require_env().action_space
+        if self._uniform_box:
+            return space.np_random.uniform(space.low, space.high).astype(space.dtype)
+        return space.sample()
 
 
 class ExpertPolicy(BasePolicy):
