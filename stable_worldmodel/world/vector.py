@@ -26,8 +26,12 @@ from .batching import concat_batches, stack_dicts
 logger = logging.getLogger(__name__)
 
 MODES = ("auto", "sync", "async")
-# Below this many envs the pipe round trip costs more than the second core gives back.
-AUTO_ASYNC_MIN_ENVS = 4
+# "auto" uses worker processes only where they pay: the built-in 2-D envs step in 0.1-0.3 ms,
+# so the pipe round trip and the main process's own work (policy, batching) eat the gain
+# unless there are enough envs *and* enough cores besides the main process's
+# (bench/bench_world.py: on 2 cores, async == sync at 16 PushT envs and slower below).
+AUTO_ASYNC_MIN_ENVS = 8
+AUTO_ASYNC_MIN_CPUS = 4
 
 
 class EnvGroup:
@@ -158,7 +162,7 @@ class VecEnv:
             raise ConfigError(f"VecEnv requires mode in {MODES}, got {mode!r}")
         cpus = os.cpu_count() or 1
         if mode == "auto":
-            mode = "async" if num_envs >= AUTO_ASYNC_MIN_ENVS and cpus >= 2 else "sync"
+            mode = "async" if num_envs >= AUTO_ASYNC_MIN_ENVS and cpus >= AUTO_ASYNC_MIN_CPUS else "sync"
         self.mode = mode
         self.num_envs = int(num_envs)
         self.closed = False
