@@ -1,0 +1,22 @@
+"""Command-line interface for stable-worldmodel (``swm``, ``stable-worldmodel``, ``python -m stable_worldmodel.cli``).
+
+Commands:
+
+- ``swm list {model|dataset|world}``: cached models / datasets, registered worlds.
+- ``swm show {dataset|world} [NAMES...] [--all]``: panels with columns, counts, shapes, spaces, factors.
+- ``swm delete {model|dataset} NAMES... [--yes]``: remove cached resources (asks first).
+- ``swm collect ENV``: record an HDF5 dataset; ``swm eval ENV``: success rate with a 95% interval.
+- ``swm envs`` / ``swm fovs ENV``: environments and their factors of variation.
+- ``swm demo``: collect, show, evaluate random vs expert, videos and a plot.
+- ``swm --version``.
+
+Bad input exits non-zero with one ``Error: ...`` line (``SWM_DEBUG=1`` shows the traceback).
+"""
+
+from __future__ import annotations
+
+from .root import app, common, main
+from .display import display_dataset_info, display_world_info
+from .resources import delete, list_cmd, show
+
+__all__ = ["app", "common", "delete", "display_dataset_info", "display_world_info", "list_cmd", "main", "show"]

@@ -1,0 +1,136 @@
+"""``swm demo`` (what ``make demo`` runs): the whole data-and-evaluation loop on one env.
+
+1. record expert episodes into a dataset (in the cache) and show it;
+2. evaluate the random and the expert policy on the same seeds;
+3. write one MP4 rollout of each policy, a PNG bar plot of the success rates with 95%
+   Wilson intervals and a ``results.json``;
+4. end with one line naming where the outputs are.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import tempfile
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from .errors import int_in
+from .pipeline import ImageSizeOpt, MaxStepsOpt, SeedOpt, default_dataset_name
+from .stats import SuccessSummary
+
+DEFAULT_ENV = "swm/TwoRoom-v1"
+DEFAULT_OUT = Path("demo_outputs")
+POLICY_ORDER = ("random", "expert")
+PLOT_NAME = "success_rates.png"
+RESULTS_NAME = "results.json"
+#: the evaluation seeds start here, away from the seeds of the recorded episodes
+EVAL_SEED_OFFSET = 10_000
+
+
+def plot_success_rates(summaries: Sequence[SuccessSummary], path: Path, title: str) -> Path:
+    """Bar plot of success rates (percent) with asymmetric 95% Wilson error bars, saved as PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rates = [100 * s.rate for s in summaries]
+    lows = [max(0.0, 100 * (s.rate - s.interval[0])) for s in summaries]  # rounding can make 0 a tiny negative
+    highs = [max(0.0, 100 * (s.interval[1] - s.rate)) for s in summaries]
+    fig, ax = plt.subplots(figsize=(4.5, 3.6), dpi=120)
+    try:
+        colors = ["#9aa5b1", "#2f7ebc", "#3a9d5d", "#c4703a"][: len(summaries)]
+        bars = ax.bar([s.label for s in summaries], rates, yerr=[lows, highs], capsize=8, color=colors, edgecolor="black", linewidth=0.6)
+        for bar, s, top in zip(bars, summaries, highs):
+            label = f"{100 * s.rate:.0f}% ({s.successes}/{s.episodes})"
+            ax.annotate(label, (bar.get_x() + bar.get_width() / 2, 100 * s.rate + top + 2), ha="center", va="bottom", fontsize=8)
+        ax.set_ylim(0, 112)
+        ax.set_ylabel("success rate (%)")
+        ax.set_title(title, fontsize=9)
+        ax.grid(axis="y", alpha=0.3)
+        fig.tight_layout()
+        fig.savefig(path)
+    finally:
+        plt.close(fig)
+    return path
+
+
+def _record_rollout(env: str, policy: str, path: Path, seed: int, image_size: int, max_steps: int) -> Path:
+    """One MP4 of ``policy`` on the episode of seed ``seed`` (the first evaluation episode)."""
+    from .worlds import make_policy, make_world
+
+    with tempfile.TemporaryDirectory(dir=path.parent) as tmp, make_world(env, 1, image_size, max_steps, seed=seed, verbose=0) as world:
+        world.set_policy(make_policy(policy, env, seed=seed))
+        (video,) = world.record_video(tmp, max_steps=max_steps, fps=10, seed=seed)
+        shutil.move(str(video), path)
+    return path
+
+
+def _write_results(path: Path, env: str, seed: int, summaries: Sequence[SuccessSummary], dataset: Path) -> None:
+    record = {
+        "env": env,
+        "dataset": str(dataset),
+        "eval_seeds": [seed, seed + summaries[0].episodes - 1],
+        "policies": {
+            s.label: {"episodes": s.episodes, "successes": s.successes, "success_rate": round(s.rate, 4), "ci95": [round(v, 4) for v in s.interval], "mean_length": round(s.mean_length, 2)}
+            for s in summaries
+        },
+    }
+    path.write_text(json.dumps(record, indent=2) + "\n")
+
+
+def demo(
+    env: Annotated[str, typer.Option("--env", metavar="ENV", help="Environment id (it needs an expert; see `swm envs`).")] = DEFAULT_ENV,
+    episodes: Annotated[int, typer.Option("--episodes", "-n", parser=int_in(1), metavar="N", help="Expert episodes to record.")] = 50,
+    eval_episodes: Annotated[int, typer.Option("--eval-episodes", parser=int_in(1), metavar="N", help="Evaluation episodes per policy.")] = 100,
+    out: Annotated[Path, typer.Option("--out", metavar="DIR", help="Folder for the videos, the plot and results.json.", file_okay=False)] = DEFAULT_OUT,
+    seed: SeedOpt = 0,
+    image_size: ImageSizeOpt = 64,
+    max_steps: MaxStepsOpt = None,
+) -> None:
+    """Collect expert data, show it, evaluate random vs expert, and write videos and a plot.
+
+    Example: swm demo --env swm/TwoRoom-v1 --episodes 50 --out demo_outputs
+    """
+    from ..data import dataset_info, delete_dataset
+    from ..data.utils import resolve_dataset_path
+    from .display import console, display_dataset_info, success_table
+    from .worlds import episode_limit, evaluate_policy, make_policy, make_world, resolve_env
+
+    env = resolve_env(env)
+    max_steps = episode_limit(env, max_steps)
+    make_policy("expert", env)  # fail now (one line) when the env has no expert
+    out.mkdir(parents=True, exist_ok=True)
+    con = console()
+    name = "demo-" + default_dataset_name(env, "expert")
+
+    con.rule(f"[1/4] Recording {episodes} expert episodes of {env}")
+    if resolve_dataset_path(name).exists():
+        delete_dataset(name)
+    with make_world(env, 1, image_size, max_steps, seed=seed) as world:
+        world.set_policy(make_policy("expert", env, seed=seed))
+        dataset = world.record_dataset(name, episodes=episodes, seed=seed)
+    display_dataset_info(dataset_info(name))
+
+    eval_seed = seed + EVAL_SEED_OFFSET
+    con.rule(f"[2/4] Evaluating {', '.join(POLICY_ORDER)} on the same {eval_episodes} seeds")
+    summaries = []
+    with make_world(env, 1, image_size, max_steps, seed=eval_seed) as world:
+        for policy in POLICY_ORDER:
+            summaries.append(SuccessSummary.from_results(policy, evaluate_policy(world, policy, eval_episodes, eval_seed)))
+    con.print(success_table(f"{env}: seeds {eval_seed}..{eval_seed + eval_episodes - 1}, at most {max_steps} steps", summaries))
+
+    con.rule("[3/4] Recording one rollout video per policy")
+    videos = [_record_rollout(env, p, out / f"{p}.mp4", eval_seed, image_size, max_steps) for p in POLICY_ORDER]
+    con.print("Videos: " + ", ".join(str(v) for v in videos), soft_wrap=True)
+
+    con.rule("[4/4] Plotting success rates with 95% confidence intervals")
+    plot = plot_success_rates(summaries, out / PLOT_NAME, f"{env}, {eval_episodes} episodes per policy (95% Wilson CI)")
+    _write_results(out / RESULTS_NAME, env, eval_seed, summaries, dataset)
+    con.print(f"Plot: {plot}", soft_wrap=True)
+    files = ", ".join(p.name for p in (*videos, plot)) + f", {RESULTS_NAME}"
+    typer.echo(f"Demo outputs in {out.resolve()} ({files}); dataset '{name}' at {dataset}")

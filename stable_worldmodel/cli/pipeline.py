@@ -1,0 +1,150 @@
+"""Pipeline commands: ``swm collect``, ``swm eval``, ``swm envs`` and ``swm fovs``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from .errors import int_in, require
+
+EnvArg = Annotated[str, typer.Argument(help="Environment id, e.g. swm/TwoRoom-v1 (see `swm envs`).", metavar="ENV", show_default=False)]
+PolicyOpt = Annotated[str, typer.Option("--policy", "-p", metavar="POLICY", help="Policy that acts: random or expert.")]
+NumEnvsOpt = Annotated[int, typer.Option("--num-envs", parser=int_in(1), metavar="K", help="Environments stepped together.")]
+ImageSizeOpt = Annotated[int, typer.Option("--image-size", parser=int_in(8, 1024), metavar="S", help="Side of the square images (pixels).")]
+SeedOpt = Annotated[int, typer.Option("--seed", parser=int_in(0), metavar="SEED", help="Episode k uses seed SEED + k.")]
+MaxStepsOpt = Annotated[
+    int | None,
+    typer.Option("--max-steps", parser=int_in(1), metavar="M", help="Steps before an episode is cut (default: the env's registered limit).", show_default=False),
+]
+VariationOpt = Annotated[
+    list[str] | None,
+    typer.Option("--variation", metavar="KEY", help="Factor of variation to resample every episode (repeatable; 'all' for every factor; see `swm fovs ENV`)."),
+]
+
+
+def default_dataset_name(env_id: str, policy: str) -> str:
+    """``swm/TwoRoom-v1`` + ``expert`` -> ``tworoom-v1-expert``."""
+    return f"{env_id.rsplit('/', 1)[-1].lower()}-{policy}"
+
+
+def collect(
+    env: EnvArg,
+    episodes: Annotated[int, typer.Option("--episodes", "-n", parser=int_in(1), metavar="N", help="Episodes to record.")] = 10,
+    policy: PolicyOpt = "random",
+    name: Annotated[str | None, typer.Option("--name", metavar="NAME", help="Dataset name (default: <env>-<policy>).", show_default=False)] = None,
+    num_envs: NumEnvsOpt = 1,
+    image_size: ImageSizeOpt = 64,
+    seed: SeedOpt = 0,
+    variation: VariationOpt = None,
+    max_steps: MaxStepsOpt = None,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing dataset of that name instead of appending.")] = False,
+) -> None:
+    """Record EPISODES episodes of ENV into an HDF5 dataset in the cache, then show it.
+
+    Example: swm collect swm/TwoRoom-v1 --episodes 20 --policy expert --name tworoom
+    """
+    from ..data import dataset_info, delete_dataset
+    from ..data.utils import resolve_dataset_path
+    from .display import console, display_dataset_info
+    from .worlds import check_factors, check_policy, make_policy, make_world, reset_options, resolve_env
+
+    env = resolve_env(env)
+    policy = check_policy(policy)
+    name = name or default_dataset_name(env, policy)
+    require(bool(name.strip()) and "/" not in name and "\\" not in name, f"swm collect requires a plain dataset name (no path), got {name!r}")
+    path = resolve_dataset_path(name)
+    out = console()
+    if path.exists():
+        if overwrite:
+            delete_dataset(name)
+        else:
+            out.print(f"Dataset [bold]{name}[/] exists: appending {episodes} episodes (--overwrite replaces it).", soft_wrap=True)
+    with make_world(env, num_envs=num_envs, image_size=image_size, max_steps=max_steps, seed=seed) as world:
+        options = reset_options(check_factors(world, variation or []))
+        world.set_policy(make_policy(policy, env, seed=seed))
+        path = world.record_dataset(name, episodes=episodes, seed=seed, options=options)
+    display_dataset_info(dataset_info(name))
+    out.print(f"Recorded {episodes} {policy} episodes of {env} to {path}", soft_wrap=True)
+
+
+def eval_cmd(
+    env: EnvArg,
+    policy: PolicyOpt = "random",
+    episodes: Annotated[int, typer.Option("--episodes", "-n", parser=int_in(1), metavar="N", help="Episodes to evaluate.")] = 20,
+    seed: SeedOpt = 0,
+    variation: VariationOpt = None,
+    video: Annotated[Path | None, typer.Option("--video", metavar="DIR", help="Also write one MP4 per env of a rollout into this folder.", file_okay=False)] = None,
+    num_envs: NumEnvsOpt = 1,
+    max_steps: MaxStepsOpt = None,
+    image_size: ImageSizeOpt = 64,
+) -> None:
+    """Evaluate a policy on ENV and print its success rate with a 95% confidence interval.
+
+    Example: swm eval swm/TwoRoom-v1 --policy expert --episodes 50 --video videos/
+    """
+    from .display import console, success_table
+    from .stats import SuccessSummary
+    from .worlds import check_policy, episode_limit, evaluate_policy, make_world, reset_options, resolve_env
+
+    env = resolve_env(env)
+    policy = check_policy(policy)
+    max_steps = episode_limit(env, max_steps)
+    out = console()
+    with make_world(env, num_envs=num_envs, image_size=image_size, max_steps=max_steps, seed=seed) as world:
+        results = evaluate_policy(world, policy, episodes, seed, variation or [])
+        summary = SuccessSummary.from_results(policy, results)
+        out.print(success_table(f"{env}: seeds {seed}..{seed + episodes - 1}, at most {max_steps} steps", [summary]))
+        if video is not None:
+            paths = world.record_video(video, max_steps=max_steps, seed=seed, options=reset_options(variation or []))
+            out.print("Videos: " + ", ".join(str(p) for p in paths), soft_wrap=True)
+
+
+def _factor_count(env_id: str) -> str:
+    from .worlds import variation_space_of
+
+    try:
+        space = variation_space_of(env_id)
+    except ImportError as exc:  # an optional extra or an env family that is not installed
+        return f"n/a ({type(exc).__name__})"
+    return str(len(space.names())) if space is not None else "0"
+
+
+def envs(tag: Annotated[str | None, typer.Option("--tag", metavar="TAG", help="Only environments with this tag (e.g. paper, discrete).")] = None) -> None:
+    """List the registered environments with their number of factors of variation and tags.
+
+    Example: swm envs --tag paper
+    """
+    from rich.table import Table
+
+    from ..envs import get_entry, list_envs
+    from .display import console
+    from .errors import check_choice
+
+    if tag is not None:
+        check_choice("tag", tag, sorted({t for e in list_envs() for t in get_entry(e).tags}))
+    table = Table(title="Environments")
+    for column, justify in (("id", "left"), ("factors", "right"), ("tags", "left"), ("expert", "left")):
+        table.add_column(column, justify=justify, style="cyan" if column == "id" else None, no_wrap=column == "id")
+    for env_id in list_envs(tag):
+        entry = get_entry(env_id)
+        table.add_row(env_id, _factor_count(env_id), ", ".join(entry.tags), "yes" if entry.expert else "no")
+    console().print(table)
+
+
+def fovs(env: EnvArg) -> None:
+    """Show the factors of variation of ENV: type, range, shape and default of each.
+
+    Example: swm fovs swm/TwoRoom-v1
+    """
+    from .display import console, factor_tree
+    from .worlds import resolve_env, variation_space_of
+
+    env = resolve_env(env)
+    space = variation_space_of(env)
+    count = len(space.names()) if space is not None else 0
+    out = console()
+    out.print(factor_tree(f"{env}: {count} factors of variation", space))
+    if count:
+        out.print("Resample some every episode with --variation NAME (a factor, a group, or 'all').")

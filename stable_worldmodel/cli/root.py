@@ -1,0 +1,136 @@
+"""The root ``swm`` command (the Typer app): the global callback, error handling, and the command table.
+
+Only Typer and Rich are imported here; every command imports what it needs when it runs,
+so ``swm --version`` and ``swm --help`` stay fast.
+"""
+
+from __future__ import annotations
+
+import logging
+import sys
+from collections.abc import Sequence
+from typing import Annotated, Any
+
+import typer
+from typer.core import TyperGroup
+
+from .errors import USAGE_EXIT, USER_ERROR_EXIT, USER_ERRORS, one_line, report, shows_traceback
+
+_HANDLER_MARK = "_swm_cli_handler"
+
+try:  # Typer >= 0.2x vendors Click; older releases depend on it
+    from typer._click.exceptions import ClickException
+except ImportError:  # pragma: no cover - depends on the installed Typer
+    from click.exceptions import ClickException
+
+
+class SWMGroup(TyperGroup):
+    """The command group; turns user errors into one ``Error: ...`` line on stderr.
+
+    Whatever the caller asks (``standalone_mode``), the group runs the command itself and
+    maps the outcome to an exit status: 0, 1 (a rejected value or a declined prompt) or 2
+    (a bad command line). Exceptions that are not user errors propagate with their traceback.
+    """
+
+    def main(self, args: Sequence[str] | None = None, prog_name: str | None = None, complete_var: str | None = None, standalone_mode: bool = True, **extra: Any) -> Any:
+        try:
+            rv = super().main(args=args, prog_name=prog_name, complete_var=complete_var, standalone_mode=False, **extra)
+            code = rv if isinstance(rv, int) and not isinstance(rv, bool) else 0
+        except ClickException as exc:  # bad command line: missing argument, not an integer, ...
+            if type(exc).__name__ == "NoArgsIsHelpError":  # bare `swm`: the help (Rich mode printed it already)
+                if not _rich_help(self):
+                    sys.stdout.write(exc.format_message() + "\n")
+                return _finish(0, standalone_mode)
+            hint = f" (see '{exc.ctx.command_path} --help')" if getattr(exc, "ctx", None) is not None else ""
+            sys.stderr.write(f"Error: {one_line(exc.format_message())}{hint}\n")
+            code = exc.exit_code if exc.exit_code else USAGE_EXIT
+        except typer.Abort:
+            sys.stderr.write("Aborted.\n")
+            code = USER_ERROR_EXIT
+        except USER_ERRORS as exc:
+            if shows_traceback(exc):
+                raise
+            code = report(exc, USER_ERROR_EXIT)
+        return _finish(code, standalone_mode)
+
+
+def _rich_help(group: TyperGroup) -> bool:
+    from typer import core
+
+    return bool(getattr(core, "HAS_RICH", False)) and getattr(group, "rich_markup_mode", None) is not None
+
+
+def _finish(code: int, standalone_mode: bool) -> int:
+    if standalone_mode:
+        sys.exit(code)
+    return code
+
+
+app = typer.Typer(
+    name="swm",
+    cls=SWMGroup,
+    help="stable-worldmodel: collect datasets from worlds with factors of variation, inspect them, evaluate policies.",
+    no_args_is_help=True,
+    add_completion=False,
+    pretty_exceptions_show_locals=False,
+    context_settings={"help_option_names": ["-h", "--help"]},
+)
+
+
+def setup_logging(verbosity: int = 0) -> logging.Logger:
+    """Route ``stable_worldmodel`` logs to a :class:`rich.logging.RichHandler` on stderr (installed once).
+
+    ``verbosity`` 0 shows warnings, 1 info, 2 and more debug messages.
+    """
+    logger = logging.getLogger("stable_worldmodel")
+    logger.setLevel(max(logging.DEBUG, logging.WARNING - 10 * verbosity))
+    if not any(getattr(h, _HANDLER_MARK, False) for h in logger.handlers):
+        from rich.console import Console
+        from rich.logging import RichHandler
+
+        handler = RichHandler(console=Console(stderr=True), show_path=False, show_time=False)
+        setattr(handler, _HANDLER_MARK, True)
+        logger.addHandler(handler)
+    return logger
+
+
+def _print_version(value: bool) -> None:
+    if value:
+        from .. import __version__
+
+        typer.echo(f"stable-worldmodel {__version__}")
+        raise typer.Exit()
+
+
+@app.callback()
+def common(
+    version: Annotated[
+        bool | None, typer.Option("--version", "-V", callback=_print_version, is_eager=True, help="Print the version and exit.")
+    ] = None,
+    verbose: Annotated[int, typer.Option("--verbose", "-v", count=True, help="More log messages (-v info, -vv debug).")] = 0,
+) -> None:
+    """Common options for all stable-worldmodel commands."""
+    setup_logging(verbose)
+
+
+def _register() -> None:
+    from .demo import demo
+    from .pipeline import collect, envs, eval_cmd, fovs
+    from .resources import delete, list_cmd, show
+
+    app.command("list")(list_cmd)
+    app.command("show")(show)
+    app.command("delete")(delete)
+    app.command("collect")(collect)
+    app.command("eval")(eval_cmd)
+    app.command("envs")(envs)
+    app.command("fovs")(fovs)
+    app.command("demo")(demo)
+
+
+_register()
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run ``swm`` on ``argv`` (default: ``sys.argv[1:]``) and return its exit status."""
+    return typer.main.get_command(app).main(args=list(argv) if argv is not None else None, prog_name="swm", standalone_mode=False)

@@ -1,0 +1,120 @@
+"""What the pipeline commands share: checking an env id, a policy name and factor names,
+building a :class:`~stable_worldmodel.World`, and evaluating a policy in it.
+
+Heavy modules (the World, its envs) are imported inside the functions.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+from .. import keys
+from ..errors import unknown_name
+from .errors import check_choice
+
+if TYPE_CHECKING:
+    from ..world import World
+
+POLICIES = ("random", "expert")
+#: episode limit of envs registered without one
+DEFAULT_MAX_STEPS = 100
+
+
+def resolve_env(env_id: str) -> str:
+    """``env_id`` when it is a registered ``swm/...`` (or Gymnasium) id, else a "did you mean" error."""
+    import gymnasium as gym
+
+    from ..envs import list_envs
+
+    if env_id in list_envs() or env_id in gym.registry:
+        return env_id
+    raise unknown_name("environment", env_id, list_envs())
+
+
+def check_policy(name: str) -> str:
+    """``name`` when it is one of :data:`POLICIES`."""
+    return check_choice("policy", name, POLICIES)
+
+
+def make_policy(name: str, env_id: str, seed: int | None = None) -> Any:
+    """A fresh batched policy: ``random`` (seeded with ``seed``) or the env's scripted ``expert``."""
+    from ..envs import expert_policy
+    from ..policy import RandomPolicy
+
+    if check_policy(name) == "random":
+        return RandomPolicy(seed=seed)
+    return expert_policy(env_id)
+
+
+def check_factors(world: World, factors: Sequence[str]) -> list[str]:
+    """``factors`` (``"all"``, a factor name or a group such as ``agent``) checked against the world's variation space."""
+    factors = list(factors)
+    if not factors:
+        return factors
+    space = world.single_variation_space
+    names = list(space.names()) if space is not None else []
+    for name in factors:
+        if name != "all" and name not in names and not any(n.startswith(name + ".") for n in names):
+            raise unknown_name(f"factor of variation of {world.env_name}", name, ["all", *names])
+    return factors
+
+
+def reset_options(factors: Sequence[str]) -> dict | None:
+    """The reset options that resample ``factors`` every episode (None when there are none)."""
+    return {keys.VARIATION: list(factors)} if factors else None
+
+
+def episode_limit(env_id: str, max_steps: int | None = None) -> int:
+    """``max_steps`` when given, else the env's registered episode limit, else :data:`DEFAULT_MAX_STEPS`."""
+    from ..envs import get_entry
+
+    if max_steps is not None:
+        return int(max_steps)
+    return int(get_entry(env_id).max_episode_steps or DEFAULT_MAX_STEPS)
+
+
+def make_world(
+    env_id: str,
+    num_envs: int = 1,
+    image_size: int = 64,
+    max_steps: int | None = None,
+    seed: int | None = None,
+    verbose: int = 1,
+    **kwargs: Any,
+) -> World:
+    """A World of ``num_envs`` copies of ``env_id`` with square ``image_size`` images and
+    episodes cut after :func:`episode_limit` steps."""
+    from ..world import World
+
+    if seed is not None:
+        kwargs["seed"] = seed
+    limit = episode_limit(env_id, max_steps)
+    return World(env_id, num_envs, (image_size, image_size), max_episode_steps=limit, verbose=verbose, **kwargs)
+
+
+def evaluate_policy(
+    world: World,
+    policy_name: str,
+    episodes: int,
+    seed: int | None,
+    factors: Sequence[str] = (),
+) -> dict[str, Any]:
+    """Set a fresh ``policy_name`` policy on ``world`` and run ``World.evaluate``.
+
+    Episode ``k`` uses seed ``seed + k``, so two policies evaluated with the same ``seed``
+    face the same start and goal configurations.
+    """
+    world.set_policy(make_policy(policy_name, world.env_name, seed=seed))
+    return world.evaluate(episodes=episodes, seed=seed, options=reset_options(check_factors(world, factors)))
+
+
+def variation_space_of(env_id: str) -> Any:
+    """The variation space of a freshly made ``env_id`` (None when the env has none)."""
+    import gymnasium as gym
+
+    env = gym.make(resolve_env(env_id), disable_env_checker=True)
+    try:
+        return getattr(env.unwrapped, "variation_space", None)
+    finally:
+        env.close()

@@ -1,0 +1,171 @@
+"""The ``swm`` app: version, help, logging, and how errors reach the user."""
+
+from __future__ import annotations
+
+import logging
+import subprocess
+import sys
+
+import pytest
+import typer
+
+import stable_worldmodel as swm_pkg
+from stable_worldmodel import cli
+from stable_worldmodel.cli import root as app_module
+from stable_worldmodel.cli.errors import error_line as format_error, int_in, is_user_error, one_line
+from stable_worldmodel.errors import ConfigError, unknown_name
+
+
+def test_seed_functions_exist():
+    for name in ("app", "main", "common", "list_cmd", "show", "delete", "display_dataset_info", "display_world_info"):
+        assert callable(getattr(cli, name)), name
+
+
+def test_version(swm):
+    result = swm("--version")
+    assert result.exit_code == 0
+    assert result.stdout.strip() == f"stable-worldmodel {swm_pkg.__version__}"
+
+
+def test_version_short_flag_and_main_return_code(capsys):
+    assert cli.main(["-V"]) == 0
+    assert capsys.readouterr().out.strip() == f"stable-worldmodel {swm_pkg.__version__}"
+
+
+def test_python_dash_m_version():
+    out = subprocess.run([sys.executable, "-m", "stable_worldmodel.cli", "--version"], capture_output=True, text=True, timeout=60)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == f"stable-worldmodel {swm_pkg.__version__}"
+
+
+def test_cli_import_pulls_in_no_heavy_module():
+    probe = "import sys, stable_worldmodel.cli; print(sorted(m for m in ('torch', 'h5py', 'cv2', 'matplotlib') if m in sys.modules))"
+    out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True, timeout=60)
+    assert out.stdout.strip() == "[]"
+
+
+def test_bare_swm_prints_help_and_succeeds(swm):
+    result = swm()
+    assert result.exit_code == 0
+    for command in ("list", "show", "delete", "collect", "eval", "envs", "fovs", "demo"):
+        assert command in result.output
+
+
+def test_every_command_has_help(swm):
+    for command in ("list", "show", "delete", "collect", "eval", "envs", "fovs", "demo"):
+        result = swm(command, "--help")
+        assert result.exit_code == 0, command
+        assert "Example: swm" in result.output, command
+
+
+def test_unknown_command_is_one_line_with_suggestion(swm, error_line):
+    result = swm("colect")
+    assert result.exit_code == 2
+    line = error_line(result)
+    assert "'colect'" in line and "collect" in line
+
+
+def test_missing_argument_is_one_line(swm, error_line):
+    result = swm("fovs")
+    assert result.exit_code == 2
+    assert "ENV" in error_line(result).upper()
+
+
+@pytest.mark.parametrize("value", ["abc", "0", "-3"])
+def test_bad_number_is_one_line_naming_it(swm, error_line, value):
+    result = swm("eval", "swm/Toy-v0", "--episodes", value)
+    assert result.exit_code == 2
+    line = error_line(result)
+    assert "--episodes" in line and value in line and ">= 1" in line
+
+
+def test_int_in_parser():
+    parse = int_in(8, 16)
+    assert parse("12") == 12 and parse(8) == 8
+    for bad in ("7", "17", "x", "1.5"):
+        with pytest.raises(ValueError, match="in \\[8, 16\\]"):
+            parse(bad)
+
+
+def test_one_line_collapses_whitespace_and_pydantic_prefix():
+    assert one_line("a\n  b\tc") == "a b c"
+    assert one_line("Value error, expected 3") == "expected 3"
+
+
+def test_user_error_classification():
+    def raise_from_numpy():
+        import numpy as np
+
+        np.zeros(2).reshape(3)
+
+    with pytest.raises(ValueError) as numpy_error:
+        raise_from_numpy()
+    assert not is_user_error(numpy_error.value)  # a bug in our code: keep the traceback
+    assert is_user_error(ConfigError("x"))  # typed errors always are
+    assert is_user_error(unknown_name("thing", "a", ["b"]))
+    with pytest.raises(ValueError) as ours:
+        int_in(1)("0")  # a plain ValueError raised by stable_worldmodel code itself
+    assert is_user_error(ours.value)
+    assert not is_user_error(ValueError("never raised"))  # no traceback: origin unknown
+    assert not is_user_error(TypeError("t"))
+    assert format_error(KeyError("k")) == "Error: unknown key 'k'"
+
+
+@pytest.fixture
+def boom_command():
+    """Temporarily add ``swm boom KIND`` raising a user error, a library bug or an outside ValueError."""
+
+    def boom(kind: str) -> None:
+        if kind == "user":
+            raise ConfigError("Boom requires a valid\nsetting, got 3")
+        if kind == "bug":
+            raise TypeError("a real bug")
+        import numpy as np
+
+        np.zeros(2).reshape(3)  # ValueError raised inside numpy: a bug, not a user error
+
+    app_module.app.command("boom")(boom)
+    yield
+    app_module.app.registered_commands.pop()
+    assert "boom" not in typer.main.get_command(app_module.app).commands
+
+
+def test_user_error_is_one_line_exit_1(swm, error_line, boom_command):
+    result = swm("boom", "user")
+    assert result.exit_code == 1
+    assert error_line(result) == "Error: Boom requires a valid setting, got 3"
+
+
+def test_bugs_keep_their_traceback(swm, boom_command):
+    result = swm("boom", "bug")
+    assert isinstance(result.exception, TypeError)
+    result = swm("boom", "numpy")
+    assert isinstance(result.exception, ValueError)
+
+
+def test_swm_debug_shows_user_error_traceback(swm, boom_command, monkeypatch):
+    monkeypatch.setenv("SWM_DEBUG", "1")
+    result = swm("boom", "user")
+    assert isinstance(result.exception, ConfigError)
+
+
+def test_rich_handler_is_installed_once(swm):
+    logger = logging.getLogger("stable_worldmodel")
+    before = list(logger.handlers)
+    level = logger.level
+    try:
+        for _ in range(3):
+            assert swm("-v", "list", "world").exit_code == 0
+        marked = [h for h in logger.handlers if getattr(h, app_module._HANDLER_MARK, False)]
+        assert len(marked) == 1
+        from rich.logging import RichHandler
+
+        assert isinstance(marked[0], RichHandler)
+        assert logger.level == logging.INFO
+        swm("-vv", "list", "world")
+        assert logger.level == logging.DEBUG
+    finally:
+        for handler in logger.handlers[:]:
+            if handler not in before:
+                logger.removeHandler(handler)
+        logger.setLevel(level)

@@ -1,0 +1,83 @@
+"""``swm demo`` end to end on the toy env with tiny settings."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+
+from stable_worldmodel.cli.stats import SuccessSummary, wilson_interval
+from stable_worldmodel.data import dataset_info, list_datasets
+
+TINY = ("--env", "swm/Toy-v0", "--episodes", "2", "--eval-episodes", "4", "--image-size", "16", "--max-steps", "12")
+
+
+def test_demo_writes_videos_plot_results_and_one_last_line(swm, tmp_path):
+    import imageio.v3 as iio
+
+    out = tmp_path / "demo"
+    result = swm("demo", *TINY, "--out", str(out))
+    assert result.exit_code == 0, result.output
+    stdout = result.stdout
+
+    # the dataset: recorded, kept in the cache, shown
+    assert list_datasets() == ["demo-toy-v0-expert"]
+    assert dataset_info("demo-toy-v0-expert")["num_episodes"] == 2
+    assert "dataset demo-toy-v0-expert" in stdout
+
+    # one MP4 per policy, readable, at most max_steps + 1 frames
+    for policy in ("random", "expert"):
+        frames = iio.imread(out / f"{policy}.mp4")
+        assert frames.ndim == 4 and 1 <= len(frames) <= 13
+        assert frames.shape[-1] == 3
+    assert not [p for p in out.iterdir() if p.is_dir()]  # no temporary folders left
+
+    # the plot
+    png = (out / "success_rates.png").read_bytes()
+    assert png.startswith(b"\x89PNG") and len(png) > 5_000
+
+    # results.json agrees with the printed table and the Wilson intervals
+    results = json.loads((out / "results.json").read_text())
+    assert results["env"] == "swm/Toy-v0"
+    for policy, row in results["policies"].items():
+        assert row["episodes"] == 4
+        assert np.allclose(row["ci95"], wilson_interval(row["successes"], 4), atol=1e-4)
+        assert f"{100 * row['success_rate']:.1f}%" in next(line for line in stdout.splitlines() if line.startswith(f"│ {policy} "))
+    assert results["policies"]["expert"]["successes"] == 4
+
+    # exactly one closing line naming where the outputs are
+    last = stdout.strip().splitlines()[-1]
+    assert last.startswith(f"Demo outputs in {out.resolve()} ")
+    for name in ("random.mp4", "expert.mp4", "success_rates.png", "results.json", "demo-toy-v0-expert"):
+        assert name in last
+
+
+def test_demo_rerun_replaces_its_dataset(swm, tmp_path):
+    for _ in range(2):
+        assert swm("demo", *TINY, "--out", str(tmp_path / "d")).exit_code == 0
+    assert dataset_info("demo-toy-v0-expert")["num_episodes"] == 2
+
+
+def test_demo_random_and_expert_share_seeds(swm, tmp_path):
+    from stable_worldmodel.cli.demo import EVAL_SEED_OFFSET
+
+    result = swm("demo", *TINY, "--seed", "3", "--out", str(tmp_path / "d"))
+    assert result.exit_code == 0
+    start = 3 + EVAL_SEED_OFFSET
+    assert f"seeds {start}..{start + 3}" in result.stdout
+    assert json.loads((tmp_path / "d" / "results.json").read_text())["eval_seeds"] == [start, start + 3]
+
+
+def test_demo_bad_env_is_one_line(swm, error_line, tmp_path):
+    result = swm("demo", "--env", "swm/TwoRom-v1", "--out", str(tmp_path / "d"))
+    assert result.exit_code == 1
+    assert "swm/TwoRoom-v1" in error_line(result)
+    assert not (tmp_path / "d").exists()
+
+
+def test_plot_handles_extreme_rates(tmp_path):
+    from stable_worldmodel.cli.demo import plot_success_rates
+
+    summaries = [SuccessSummary("none", 5, 0, 10.0), SuccessSummary("all", 5, 5, 3.0)]
+    path = plot_success_rates(summaries, tmp_path / "p.png", "extremes")
+    assert path.read_bytes().startswith(b"\x89PNG")

@@ -1,0 +1,189 @@
+"""``swm collect``, ``swm eval``, ``swm envs`` and ``swm fovs`` on the toy env."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+
+from stable_worldmodel.cli.stats import SuccessSummary, wilson_interval
+from stable_worldmodel.data import HDF5Dataset, dataset_info, get_cache_dir, list_datasets
+from stable_worldmodel.envs import list_envs
+
+TOY = "swm/Toy-v0"
+SMALL = ("--image-size", "16", "--max-steps", "20")
+
+
+# -- collect -----------------------------------------------------------------------------
+def test_collect_records_and_summarizes(swm):
+    result = swm("collect", TOY, "--episodes", "3", "--policy", "expert", "--name", "toyset", "--seed", "5", *SMALL)
+    assert result.exit_code == 0, result.output
+    assert list_datasets() == ["toyset"]
+    info = dataset_info("toyset")
+    assert info["num_episodes"] == 3 and info["obs_shape"] == (16, 16, 3)
+    assert "dataset toyset" in result.stdout  # the summary panel
+    assert result.stdout.strip().splitlines()[-1].startswith("Recorded 3 expert episodes of swm/Toy-v0 to ")
+    ds = HDF5Dataset("toyset")
+    assert ds.lengths.max() <= 21  # at most --max-steps steps (+ the reset frame)
+
+
+def test_collect_default_name_append_and_overwrite(swm):
+    assert swm("collect", TOY, "-n", "2", *SMALL).exit_code == 0
+    assert list_datasets() == ["toy-v0-random"]
+    again = swm("collect", TOY, "-n", "1", *SMALL)
+    assert again.exit_code == 0 and "appending" in again.stdout
+    assert dataset_info("toy-v0-random")["num_episodes"] == 3
+    fresh = swm("collect", TOY, "-n", "1", "--overwrite", *SMALL)
+    assert fresh.exit_code == 0
+    assert dataset_info("toy-v0-random")["num_episodes"] == 1
+
+
+def test_collect_with_variation_records_factor_columns(swm):
+    result = swm("collect", TOY, "-n", "2", "--name", "varied", "--variation", "agent.color", "--variation", "goal", *SMALL)
+    assert result.exit_code == 0, result.output
+    names = dataset_info("varied")["variation"]["names"]
+    assert "agent.color" in names and "goal.color" in names
+    colors = HDF5Dataset("varied").get_col_data("variation.agent.color")
+    assert len(np.unique(colors, axis=0)) > 1  # resampled per episode
+
+
+def test_collect_seed_is_reproducible(swm):
+    for name in ("a", "b"):
+        assert swm("collect", TOY, "-n", "2", "--name", name, "--seed", "3", *SMALL).exit_code == 0
+    a, b = HDF5Dataset("a"), HDF5Dataset("b")
+    np.testing.assert_array_equal(a.get_col_data("state"), b.get_col_data("state"))
+
+
+@pytest.mark.parametrize(
+    ("args", "needles"),
+    [
+        (("swm/Toyy-v0",), ["'swm/Toyy-v0'", "swm/Toy-v0"]),
+        ((TOY, "--policy", "expret"), ["'expret'", "Did you mean 'expert'", "random"]),
+        ((TOY, "--variation", "agent.colr"), ["'agent.colr'", "agent.color", "all"]),
+        ((TOY, "--name", "a/b"), ["'a/b'"]),
+    ],
+)
+def test_collect_bad_input_writes_nothing(swm, error_line, args, needles):
+    result = swm("collect", *args, "-n", "1", *SMALL)
+    assert result.exit_code == 1
+    line = error_line(result)
+    for needle in needles:
+        assert needle in line
+    assert list_datasets() == []
+
+
+@pytest.mark.parametrize("option", ["--episodes", "--num-envs", "--max-steps", "--image-size", "--seed"])
+def test_collect_bad_numbers(swm, error_line, option):
+    result = swm("collect", TOY, option, "-7")
+    assert result.exit_code == 2
+    line = error_line(result)
+    assert option in line and "-7" in line
+
+
+# -- eval --------------------------------------------------------------------------------
+def _row(stdout: str, policy: str) -> list[str]:
+    line = next(line for line in stdout.splitlines() if line.strip("│ ").startswith(policy))
+    return [cell.strip() for cell in line.strip("│").split("│")]
+
+
+def test_eval_prints_success_table(swm):
+    result = swm("eval", TOY, "--policy", "expert", "--episodes", "6", "--num-envs", "2", *SMALL)
+    assert result.exit_code == 0, result.output
+    policy, episodes, successes, rate, ci, length = _row(result.stdout, "expert")
+    assert (episodes, successes, rate) == ("6", "6", "100.0%")
+    low, high = wilson_interval(6, 6)
+    assert ci == f"[{100 * low:.1f}, {100 * high:.1f}]"
+    assert 1 <= float(length) <= 20
+    assert "seeds 0..5" in result.stdout
+
+
+def test_eval_random_matches_world_evaluate(swm):
+    from stable_worldmodel.cli.worlds import evaluate_policy, make_world
+
+    result = swm("eval", TOY, "--episodes", "5", "--seed", "11", *SMALL)
+    assert result.exit_code == 0
+    with make_world(TOY, 1, 16, 20, seed=11, verbose=0) as world:
+        expected = SuccessSummary.from_results("random", evaluate_policy(world, "random", 5, 11))
+    _, episodes, successes, rate, _, length = _row(result.stdout, "random")
+    assert int(successes) == expected.successes and rate == f"{100 * expected.rate:.1f}%"
+    assert float(length) == pytest.approx(expected.mean_length, abs=0.05)
+
+
+def test_eval_video(swm, tmp_path):
+    out = tmp_path / "videos"
+    result = swm("eval", TOY, "-p", "expert", "-n", "2", "--num-envs", "2", "--video", str(out), *SMALL)
+    assert result.exit_code == 0, result.output
+    videos = sorted(p.name for p in out.glob("*.mp4"))
+    assert videos == ["env_0.mp4", "env_1.mp4"]
+    assert all((out / v).stat().st_size > 0 for v in videos)
+
+
+def test_eval_with_variation(swm, error_line):
+    assert swm("eval", TOY, "-n", "2", "--variation", "all", *SMALL).exit_code == 0
+    result = swm("eval", TOY, "-n", "2", "--variation", "nope", *SMALL)
+    assert result.exit_code == 1
+    assert "'nope'" in error_line(result)
+
+
+def test_eval_unknown_env_suggests(swm, error_line):
+    result = swm("eval", "TwoRoom")
+    assert result.exit_code == 1
+    assert "Did you mean 'swm/TwoRoom-v1'" in error_line(result)
+
+
+# -- envs / fovs ---------------------------------------------------------------------------
+def test_envs_lists_every_env_with_factor_count(swm):
+    from stable_worldmodel.cli.worlds import variation_space_of
+
+    result = swm("envs")
+    assert result.exit_code == 0
+    for env_id in list_envs():
+        assert env_id in result.stdout
+    row = next(line for line in result.stdout.splitlines() if TOY in line)
+    assert re.search(rf"│\s+{len(variation_space_of(TOY).names())}\s+│", row)
+    assert "toy" in row
+
+
+def test_envs_tag_filter(swm, error_line):
+    result = swm("envs", "--tag", "toy")
+    assert result.exit_code == 0
+    assert TOY in result.stdout and "swm/PushT-v1" not in result.stdout
+    bad = swm("envs", "--tag", "papr")
+    assert bad.exit_code == 1
+    assert "Did you mean 'paper'" in error_line(bad)
+
+
+def test_fovs_tree(swm):
+    result = swm("fovs", TOY)
+    assert result.exit_code == 0
+    out = result.stdout
+    assert "swm/Toy-v0: 5 factors of variation" in out
+    assert re.search(r"speed\s+Box \[0\.02, 0\.1\] default 0\.05", out)
+    assert re.search(r"color\s+RGBBox \[0, 255\] \(3,\)", out)
+
+
+def test_fovs_unknown_env(swm, error_line):
+    result = swm("fovs", "swm/Tooy-v0")
+    assert result.exit_code == 1
+    assert "swm/Toy-v0" in error_line(result)
+
+
+def test_no_cache_written_by_read_only_commands(swm):
+    for args in (("envs",), ("fovs", TOY), ("list", "world")):
+        assert swm(*args).exit_code == 0
+    assert not any(get_cache_dir().glob("*.h5"))
+
+
+def test_default_episode_limit_comes_from_the_registry(swm, monkeypatch):
+    import dataclasses
+
+    from stable_worldmodel.envs import _registry
+
+    short = dataclasses.replace(_registry.get_entry(TOY), max_episode_steps=7)
+    monkeypatch.setitem(_registry._ENTRIES, TOY, short)
+    result = swm("eval", TOY, "-n", "2", "--image-size", "16")
+    assert result.exit_code == 0, result.output
+    assert "at most 7 steps" in result.stdout
+    assert float(_row(result.stdout, "random")[-1]) <= 7
+    assert "at most 9 steps" in swm("eval", TOY, "-n", "1", "--image-size", "16", "--max-steps", "9").stdout
