@@ -41,6 +41,8 @@ def short(value: Any, max_items: int = 6) -> str:
         return f"{item:.4g}" if isinstance(item, float) else str(item)
     if arr.size > 1 and np.all(arr == arr.flat[0]):
         return short(arr.flat[0])  # a constant array: its value is enough
+    if arr.ndim == 1 and arr.size <= max_items:
+        return "[" + ", ".join(short(x) for x in arr) + "]"
     return np.array2string(arr, precision=3, threshold=max_items, edgeitems=2, separator=", ").replace("\n", "")
 
 
