@@ -80,13 +80,21 @@ def make_world(
     image_size: int = 64,
     max_steps: int | None = None,
     seed: int | None = None,
-    verbose: int = 1,
+    verbose: int | None = None,
     **kwargs: Any,
 ) -> World:
     """A World of ``num_envs`` copies of ``env_id`` with square ``image_size`` images and
-    episodes cut after :func:`episode_limit` steps."""
+    episodes cut after :func:`episode_limit` steps.
+
+    ``verbose`` (progress bars of recording and evaluation) defaults to 1 when stderr is a
+    terminal and 0 otherwise, so logs and pipes get no carriage-return spam.
+    """
+    import sys
+
     from ..world import World
 
+    if verbose is None:
+        verbose = int(sys.stderr.isatty())
     if seed is not None:
         kwargs["seed"] = seed
     limit = episode_limit(env_id, max_steps)
