@@ -1,0 +1,52 @@
+"""Planning solvers: optimize action sequences against a cost model.
+
+Importing this package is cheap; each solver class (and torch) is imported on first use.
+``make_solver("cem", model, ...)`` builds a solver by its registered name.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+from ._registry import get_solver_class, list_solvers, make_solver, register_solver
+
+_ATTRS = {
+    "Solver": "solver",
+    "BaseSolver": "solver",
+    "Costable": "solver",
+    "AUTO_BATCH": "solver",
+    "CEMSolver": "cem",
+    "ICEMSolver": "icem",
+    "MPPISolver": "mppi",
+    "GradientSolver": "gd",
+    "GDSolver": "gd",
+    "PGDSolver": "discrete_solvers",
+    "RandomSolver": "random",
+    "NevergradSolver": "nevergrad",
+}
+
+__all__ = ["get_solver_class", "list_solvers", "make_solver", "register_solver", *_ATTRS]
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _ATTRS:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{_ATTRS[name]}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
+
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .cem import CEMSolver  # noqa: F401
+    from .discrete_solvers import PGDSolver  # noqa: F401
+    from .gd import GDSolver, GradientSolver  # noqa: F401
+    from .icem import ICEMSolver  # noqa: F401
+    from .mppi import MPPISolver  # noqa: F401
+    from .nevergrad import NevergradSolver  # noqa: F401
+    from .random import RandomSolver  # noqa: F401
+    from .solver import AUTO_BATCH, BaseSolver, Costable, Solver  # noqa: F401

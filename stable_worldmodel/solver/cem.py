@@ -1,0 +1,60 @@
+"""Cross-Entropy Method: refit a diagonal Gaussian to the ``topk`` cheapest candidates."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import torch
+
+from ._registry import register_solver
+from .solver import AUTO_BATCH, BaseSolver
+
+
+@register_solver("cem")
+class CEMSolver(BaseSolver):
+    """Cross-Entropy Method over action sequences, batched over envs.
+
+    Each of ``n_steps`` iterations samples ``num_samples`` candidates ``(B, S, H, A)``
+    around the mean (candidate 0 is the mean itself), clamps them into the Box bounds,
+    and refits mean and std to the ``topk`` cheapest. The initial std is ``var_scale``
+    (in action units); the initial mean is ``init_action`` (warm start) or zeros.
+
+    ``batch_size``: the default (shown as 1, the original's value) plans all envs in one
+    pass; an explicit int caps the envs per pass (``batch_size=1`` is the original's
+    env-by-env loop), ``None`` also means all. Returns ``actions: (B, H, A)`` (the final
+    mean), ``costs: (B,)`` (cost of the best elite of the last iteration), ``mean`` and
+    ``var`` (the final std, ``(B, H, A)``), all on the CPU.
+
+    Example::
+
+        >>> import gymnasium as gym, numpy as np, torch
+        >>> from stable_worldmodel.policy import PlanConfig
+        >>> class Bowl:
+        ...     def get_cost(self, info, candidates):  # (B, S, H, A) -> (B, S)
+        ...         return ((candidates - 0.5) ** 2).sum(dim=(2, 3))
+        >>> solver = CEMSolver(Bowl(), num_samples=64, n_steps=10, topk=8)
+        >>> solver.configure(action_space=gym.spaces.Box(-1, 1, (3, 2)), n_envs=3, config=PlanConfig(2, 1))
+        >>> solver.solve({})["actions"].shape
+        torch.Size([3, 2, 2])
+    """
+
+    def __init__(
+        self,
+        model: Any,
+        batch_size: int | None = AUTO_BATCH,
+        num_samples: int = 300,
+        var_scale: float = 1,
+        n_steps: int = 30,
+        topk: int = 30,
+        device: str | torch.device | None = "cpu",
+        seed: int = 1234,
+    ) -> None:
+        super().__init__(model, batch_size, num_samples, var_scale, device, seed, n_steps, topk)
+
+    @torch.no_grad()
+    def _optimize(self, info: dict, init_action: torch.Tensor | None) -> dict:
+        mean, std, info_s = self._gaussian_start(info, init_action)
+        for _ in range(self.n_steps):
+            elite_costs, elites = self._sample_elites(info_s, mean, std, self.topk)
+            mean, std = elites.mean(dim=1), elites.std(dim=1, unbiased=False)
+        return {"actions": mean, "costs": elite_costs[:, 0], "mean": mean, "var": std}

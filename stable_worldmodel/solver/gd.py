@@ -1,0 +1,97 @@
+"""Gradient descent on action sequences through a differentiable cost."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import torch
+
+from ..errors import ConfigError
+from ._registry import register_solver
+from .solver import BaseSolver
+
+
+@register_solver("gd")
+class GradientSolver(BaseSolver):
+    """Optimize ``num_samples`` plans per env with a torch optimizer, batched over envs.
+
+    Plans start at ``init_action`` (sample 0 exactly, the others perturbed by
+    ``var_scale`` noise) or, without warm start, at ``var_scale * N(0, 1)``. Each of
+    ``n_steps`` steps back-propagates ``get_cost`` (gradients w.r.t. the actions only: the
+    model's ``.grad`` are untouched), steps the optimizer, adds ``action_noise`` noise and
+    clamps into the Box bounds. The cheapest sample after the last step is returned.
+    ``optimizer_kwargs`` default to ``{"lr": 0.1}``; ``batch_size=None`` plans all envs in
+    one pass. Returns ``actions: (B, H, A)`` and ``costs: (B,)``.
+    """
+
+    def __init__(
+        self,
+        model: Any,
+        n_steps: int,
+        batch_size: int | None = None,
+        var_scale: float = 1,
+        num_samples: int = 1,
+        action_noise: float = 0.0,
+        device: str | torch.device | None = "cpu",
+        seed: int = 1234,
+        optimizer_cls: type[torch.optim.Optimizer] = torch.optim.SGD,
+        optimizer_kwargs: dict | None = None,
+    ) -> None:
+        super().__init__(model, batch_size, num_samples, var_scale, device, seed, n_steps)
+        if action_noise < 0:
+            raise ConfigError(f"{type(self).__name__} requires action_noise >= 0, got {action_noise!r}")
+        self.action_noise = float(action_noise)
+        self.optimizer_cls = optimizer_cls
+        self.optimizer_kwargs = {"lr": 0.1} if optimizer_kwargs is None else dict(optimizer_kwargs)
+
+    # -- hooks for relaxations (see discrete_solvers.PGDSolver) ------------------------------
+    def _init_variable(self, init_action: torch.Tensor | None) -> torch.Tensor:
+        """The optimized tensor ``(b, S, H, A)``."""
+        mean = self._initial_mean(init_action).unsqueeze(1)
+        noise = self.var_scale * self._randn(self.num_samples, self.horizon, self.action_dim)
+        if init_action is not None:
+            noise[:, 0] = 0
+        return self._project(mean + noise)
+
+    def _project(self, x: torch.Tensor) -> torch.Tensor:
+        """Back into the feasible set after each step (here: the Box bounds)."""
+        return self._clamp(x)
+
+    def _candidates(self, x: torch.Tensor) -> torch.Tensor:
+        """What ``get_cost`` sees for the variable ``x`` (here: ``x`` itself)."""
+        return x
+
+    def _decode(self, x: torch.Tensor) -> torch.Tensor:
+        """Final plans ``(b, S, H, A)`` from the variable (here: ``x`` itself)."""
+        return x
+
+    def _encode(self, plans: torch.Tensor) -> torch.Tensor:
+        """Candidates for final plans, to score them (here: the plans themselves)."""
+        return plans
+
+    # -- the algorithm ---------------------------------------------------------------------
+    def _optimize(self, info: dict, init_action: torch.Tensor | None) -> dict:
+        info_s = self._expand(info, self.num_samples)
+        with torch.no_grad():
+            x = self._init_variable(init_action)
+        x.requires_grad_(True)
+        optimizer = self.optimizer_cls([x], **self.optimizer_kwargs)
+        with torch.enable_grad():
+            for _ in range(self.n_steps):
+                costs = self._cost(info_s, self._candidates(x))
+                (x.grad,) = torch.autograd.grad(costs.sum(), [x])
+                optimizer.step()
+                with torch.no_grad():
+                    if self.action_noise > 0:
+                        x.add_(self.action_noise * self._randn(*x.shape[1:]))
+                    x.copy_(self._project(x))
+        with torch.no_grad():
+            plans = self._decode(x.detach())
+            costs = self._cost(info_s, self._encode(plans))
+            cost, idx = costs.min(dim=1)
+            best = plans[torch.arange(plans.shape[0], device=plans.device), idx]
+        return {"actions": best, "costs": cost}
+
+
+
+GDSolver = GradientSolver

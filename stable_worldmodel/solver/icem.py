@@ -1,0 +1,87 @@
+"""iCEM (Pinneri et al., 2020): CEM with colored noise, elite reuse and momentum."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import torch
+
+from ..errors import ConfigError
+from ._registry import register_solver
+from .solver import AUTO_BATCH, BaseSolver
+
+
+def colored_noise(white: torch.Tensor, beta: float) -> torch.Tensor:
+    """Turn white noise ``(..., H)`` into unit-variance noise with power spectrum ``1 / f**beta`` along H."""
+    h = white.shape[-1]
+    if beta == 0 or h == 1:
+        return white
+    freqs = torch.fft.rfftfreq(h, device=white.device).to(white.dtype)
+    freqs[0] = freqs[1] if h > 1 else 1.0  # no infinite DC gain
+    scale = freqs ** (-beta / 2)
+    spectrum = torch.fft.rfft(white, dim=-1, norm="ortho") * scale
+    # per-step variance of the result: (s0^2 + 2 sum s_k^2 [+ s_nyquist^2 once]) / H
+    power = scale**2
+    total = power[0] + 2 * power[1:].sum() - (power[-1] if h % 2 == 0 else 0)
+    return torch.fft.irfft(spectrum, n=h, dim=-1, norm="ortho") / torch.sqrt(total / h)
+
+
+@register_solver("icem")
+class ICEMSolver(BaseSolver):
+    """Improved CEM, batched over envs.
+
+    Differences from :class:`~stable_worldmodel.solver.CEMSolver`: noise is colored along
+    the horizon (power spectrum ``1 / f**noise_beta``: smoother plans), a fraction
+    ``elite_keep_frac`` of the elites is carried into the next iteration's candidates,
+    mean/std are updated with ``momentum`` (``new = momentum * old + (1 - momentum) * fit``),
+    and the cheapest plan ever evaluated is returned. ``batch_size`` as in CEM.
+    Returns ``actions: (B, H, A)``, ``costs: (B,)``, ``mean``, ``var`` (std).
+    """
+
+    def __init__(
+        self,
+        model: Any,
+        batch_size: int | None = AUTO_BATCH,
+        num_samples: int = 300,
+        var_scale: float = 1,
+        n_steps: int = 30,
+        topk: int = 30,
+        noise_beta: float = 2.0,
+        elite_keep_frac: float = 0.3,
+        momentum: float = 0.1,
+        device: str | torch.device | None = "cpu",
+        seed: int = 1234,
+    ) -> None:
+        super().__init__(model, batch_size, num_samples, var_scale, device, seed, n_steps, topk)
+        for key, value in (("elite_keep_frac", elite_keep_frac), ("momentum", momentum)):
+            if not 0 <= value < 1:
+                raise ConfigError(f"ICEMSolver requires 0 <= {key} < 1, got {value!r}")
+        if noise_beta < 0:
+            raise ConfigError(f"ICEMSolver requires noise_beta >= 0, got {noise_beta!r}")
+        self.noise_beta, self.momentum = float(noise_beta), float(momentum)
+        self.n_keep = int(elite_keep_frac * self.topk)
+
+    @torch.no_grad()
+    def _optimize(self, info: dict, init_action: torch.Tensor | None) -> dict:
+        mean = self._initial_mean(init_action)
+        std = torch.full_like(mean, self.var_scale)
+        b, h, a = mean.shape
+        info_new = self._expand(info, self.num_samples)
+        info_all = self._expand(info, self.num_samples + self.n_keep)
+        kept = None
+        best, best_cost = mean, torch.full((b,), float("inf"), device=self.device, dtype=self.dtype)
+        for _ in range(self.n_steps):
+            noise = colored_noise(self._randn(self.num_samples, a, h), self.noise_beta).transpose(-1, -2)
+            noise[:, 0] = 0  # candidate 0 is the mean
+            candidates = self._clamp(mean.unsqueeze(1) + std.unsqueeze(1) * noise)
+            if kept is not None:
+                candidates = torch.cat([candidates, kept], dim=1)
+            costs = self._cost(info_all if kept is not None else info_new, candidates)
+            elite_costs, elites = self._elites(candidates, costs, self.topk)
+            better = elite_costs[:, 0] < best_cost
+            best = torch.where(better[:, None, None], elites[:, 0], best)
+            best_cost = torch.minimum(elite_costs[:, 0], best_cost)
+            kept = elites[:, : self.n_keep] if self.n_keep else None
+            mean = self.momentum * mean + (1 - self.momentum) * elites.mean(dim=1)
+            std = self.momentum * std + (1 - self.momentum) * elites.std(dim=1, unbiased=False)
+        return {"actions": best, "costs": best_cost, "mean": mean, "var": std}
