@@ -1,0 +1,127 @@
+"""WorldModelPolicy: receding-horizon model-predictive control with a planning solver."""
+
+from __future__ import annotations
+
+import inspect
+import logging
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import torch
+
+from .. import keys
+from ..errors import ConfigError, UnknownNameError
+from ..policy import BasePolicy, PlanConfig, Transformable
+from ..solver.solver import Solver
+from .io import apply_process, prepare_info, to_env_actions
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["WorldModelPolicy"]
+
+
+def _is_solver(obj: Any) -> bool:
+    """``isinstance(obj, Solver)`` without evaluating properties (which may need ``configure`` first)."""
+    missing = object()
+    names = ("configure", "solve", "action_dim", "n_envs", "horizon")
+    return all(inspect.getattr_static(obj, name, missing) is not missing for name in names)
+
+
+class WorldModelPolicy(BasePolicy):
+    """Plan with ``solver`` every ``receding_horizon`` blocks, act from the plan in between.
+
+    - :meth:`set_env` configures the solver with the env's batched action space and
+      ``num_envs``. When ``process["action"]`` exists and the Box bounds are finite, the
+      solver gets the bounds mapped through ``process["action"].transform`` (it plans in
+      the model's normalized action units).
+    - :meth:`get_action` (``info_dict``: the World's numpy infos ``(B, T, ...)``) replans
+      only when its action buffer is empty: infos go through
+      :func:`~stable_worldmodel.planning.io.prepare_info` (``process`` then ``transform``),
+      the solver plans ``(B, H, A)``, and the first ``receding_horizon`` blocks
+      (``receding_horizon * action_block`` env steps) are queued after
+      ``process["action"].inverse_transform``. With ``config.warm_start`` the rest of the
+      plan ``(B, H - receding_horizon, A)`` warm-starts the next solve.
+    - Returns actions shaped like ``env.action_space`` ``(B, ...)``.
+    """
+
+    def __init__(
+        self,
+        solver: Solver,
+        config: PlanConfig,
+        process: Mapping[str, Transformable] | None = None,
+        transform: Mapping[str, Callable[[Any], Any]] | None = None,
+        **kwargs: Any,
+    ):
+        super().__init__(**kwargs)
+        if not _is_solver(solver):
+            raise ConfigError(f"WorldModelPolicy requires a Solver (configure/solve/horizon/...), got {solver!r}")
+        if not isinstance(config, PlanConfig):
+            raise ConfigError(f"WorldModelPolicy requires a PlanConfig, got {config!r}")
+        for key, proc in (process or {}).items():
+            if not isinstance(proc, Transformable):
+                raise ConfigError(f"WorldModelPolicy requires process[{key!r}] with transform/inverse_transform, got {proc!r}")
+        self.type = "world_model"
+        self.solver, self.cfg = solver, config
+        self.process = dict(process or {})
+        self.transform = dict(transform or {})
+        self.last_plan: dict | None = None
+        self.reset_plan()
+
+    @property
+    def config(self) -> PlanConfig:
+        """The planning configuration."""
+        return self.cfg
+
+    def reset_plan(self) -> None:
+        """Forget the queued actions and the warm start: the next call replans from scratch."""
+        self._queue: np.ndarray | None = None
+        self._pos = 0
+        self._next_init: torch.Tensor | None = None
+
+    def set_env(self, env: Any) -> None:
+        """Attach the vector env and configure the solver for its batched action space."""
+        super().set_env(env)
+        space = self._planning_space(env.action_space)
+        self.solver.configure(action_space=space, n_envs=int(env.num_envs), config=self.cfg)
+        self.reset_plan()
+
+    def _planning_space(self, space: gym.Space) -> gym.Space:
+        proc = self.process.get(keys.ACTION)
+        if proc is None or not isinstance(space, gym.spaces.Box) or not space.is_bounded("both"):
+            return space
+        bounds = apply_process(proc.transform, np.stack([space.low, space.high]).astype(np.float64))
+        low, high = np.minimum(bounds[0], bounds[1]), np.maximum(bounds[0], bounds[1])
+        low, high = low.reshape(space.shape).astype(np.float32), high.reshape(space.shape).astype(np.float32)
+        return gym.spaces.Box(low, high, dtype=np.float32)
+
+    def get_action(self, info_dict: Mapping[str, Any], **kwargs: Any) -> np.ndarray:
+        """The next env actions ``(B, ...)``; replans when the buffer is empty."""
+        env = self._require_env()
+        if self.solver.n_envs is None:
+            raise ConfigError("WorldModelPolicy requires set_env(env) before get_action (it configures the solver)")
+        if self._queue is None or self._pos >= self._queue.shape[1]:
+            self._replan(info_dict, env)
+        action = self._queue[:, self._pos]
+        self._pos += 1
+        return action
+
+    def _replan(self, info_dict: Mapping[str, Any], env: Any) -> None:
+        info = prepare_info(info_dict, self.process, self.transform)
+        try:
+            result = self.solver.solve(info, init_action=self._next_init)
+        except KeyError as exc:
+            missing = exc.args[0] if exc.args else None
+            if isinstance(missing, str) and missing not in info:
+                raise UnknownNameError(
+                    f"WorldModelPolicy requires info key {missing!r} for the cost model, got keys {sorted(info)}; "
+                    "check the World's options (goal_conditioned, history_size) and the env's observations"
+                ) from exc
+            raise
+        plan = result["actions"]
+        rh = self.cfg.receding_horizon
+        self._next_init = plan[:, rh:] if self.cfg.warm_start and rh < plan.shape[1] else None
+        self._queue = to_env_actions(plan[:, :rh], self.process, env.action_space, steps=True)
+        self._pos = 0
+        self.last_plan = result
