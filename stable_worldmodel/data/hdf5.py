@@ -120,9 +120,10 @@ class HDF5Dataset(Dataset):
     def _handle(self):
         pid = os.getpid()
         if self._file is None or self._pid != pid:  # first use in this process (e.g. a DataLoader worker)
+            # a forked worker must not share the parent's HDF5 handle; the decoded blocks are
+            # plain arrays and stay valid (copy-on-write), so a warm cache is kept
             self._file = open_h5(self.path)
             self._pid = pid
-            self._blocks = {}
         return self._file
 
     def __getstate__(self) -> dict[str, Any]:
