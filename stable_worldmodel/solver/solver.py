@@ -352,14 +352,19 @@ class BaseSolver:
         start, stop = self._rows
         return self._clamp(torch.zeros(stop - start, self.horizon, self.action_dim, device=self.device, dtype=self.dtype))
 
-    def _clamp(self, x: torch.Tensor, rows: tuple[int, int] | None = None) -> torch.Tensor:
-        """Clamp ``(b, ..., A)`` into the Box bounds of ``rows`` (default: the current rows)."""
-        if not self._bounded:
-            return x
+    def _bounds_like(self, x: torch.Tensor, rows: tuple[int, int] | None) -> tuple[torch.Tensor, torch.Tensor]:
+        """Bounds of ``rows`` (default: the current rows) shaped to broadcast against ``x: (b, ..., A)``."""
         start, stop = rows or self._rows
         shape = (x.shape[0],) + (1,) * (x.ndim - 2) + (x.shape[-1],)
-        low, high = self._low[start:stop].reshape(shape), self._high[start:stop].reshape(shape)
-        return torch.maximum(torch.minimum(x, high), low)
+        return self._low[start:stop].reshape(shape), self._high[start:stop].reshape(shape)
+
+    def _clamp(self, x: torch.Tensor, rows: tuple[int, int] | None = None) -> torch.Tensor:
+        """Clamp ``(b, ..., A)`` into the Box bounds of ``rows`` (default: the current rows)."""
+        return torch.clamp(x, *self._bounds_like(x, rows)) if self._bounded else x
+
+    def _clamp_(self, x: torch.Tensor) -> torch.Tensor:
+        """In-place :meth:`_clamp` for the current rows (for freshly made tensors)."""
+        return x.clamp_(*self._bounds_like(x, None)) if self._bounded else x
 
     def _reseed(self) -> torch.Generator:
         """The generator for the next draw, seeded by (solve, draw index): chunking-invariant."""
@@ -401,7 +406,8 @@ class BaseSolver:
         """Gaussian candidates ``(b, S, H, A)`` around ``mean: (b, H, A)``; candidate 0 is the mean."""
         noise = self._randn(num_samples, self.horizon, self.action_dim)
         noise[:, 0] = 0
-        return self._clamp(mean.unsqueeze(1) + std.unsqueeze(1) * noise)
+        candidates = torch.addcmul(mean.unsqueeze(1), std.unsqueeze(1), noise, out=noise)
+        return self._clamp_(candidates)
 
     def __repr__(self) -> str:
         return (
