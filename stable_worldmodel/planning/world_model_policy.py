@@ -44,6 +44,10 @@ class WorldModelPolicy(BasePolicy):
       ``process["action"].inverse_transform``. With ``config.warm_start`` the rest of the
       plan ``(B, H - receding_horizon, A)`` warm-starts the next solve.
     - Returns actions shaped like ``env.action_space`` ``(B, ...)``.
+
+    The infos are passed with all their history frames: make the World's ``history_size``
+    equal to ``config.history_len``. An env reset by the World mid-plan keeps executing the
+    queued actions until the next replan; :meth:`reset_plan` forces one.
     """
 
     def __init__(

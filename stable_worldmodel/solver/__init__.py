@@ -13,9 +13,9 @@ from ._registry import get_solver_class, list_solvers, make_solver, register_sol
 
 _ATTRS = {
     "Solver": "solver",
-    "BaseSolver": "solver",
+    "BaseSolver": "base",
     "Costable": "solver",
-    "AUTO_BATCH": "solver",
+    "AUTO_BATCH": "base",
     "CEMSolver": "cem",
     "ICEMSolver": "icem",
     "MPPISolver": "mppi",
@@ -49,4 +49,5 @@ if TYPE_CHECKING:  # pragma: no cover
     from .mppi import MPPISolver  # noqa: F401
     from .nevergrad import NevergradSolver  # noqa: F401
     from .random import RandomSolver  # noqa: F401
-    from .solver import AUTO_BATCH, BaseSolver, Costable, Solver  # noqa: F401
+    from .base import AUTO_BATCH, BaseSolver  # noqa: F401
+    from .solver import Costable, Solver  # noqa: F401

@@ -8,7 +8,7 @@ import torch
 
 from ..errors import ConfigError
 from ._registry import register_solver
-from .solver import BaseSolver
+from .base import BaseSolver
 
 
 @register_solver("gd")

@@ -8,7 +8,7 @@ import torch
 
 from ..errors import ConfigError
 from ._registry import register_solver
-from .solver import AUTO_BATCH, BaseSolver
+from .base import AUTO_BATCH, BaseSolver
 
 
 def colored_noise(white: torch.Tensor, beta: float) -> torch.Tensor:

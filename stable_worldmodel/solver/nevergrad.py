@@ -13,7 +13,7 @@ import torch
 from .._optional import require
 from ..errors import ConfigError
 from ._registry import register_solver
-from .solver import AUTO_BATCH, BaseSolver
+from .base import AUTO_BATCH, BaseSolver
 
 
 @register_solver("nevergrad")

@@ -7,7 +7,7 @@ from typing import Any
 import torch
 
 from ._registry import register_solver
-from .solver import AUTO_BATCH, BaseSolver
+from .base import AUTO_BATCH, BaseSolver
 
 
 @register_solver("random")

@@ -1,0 +1,379 @@
+"""BaseSolver: the plumbing shared by every solver.
+
+It owns configuration, dims, device and dtype, info expansion to ``(B, S, ...)`` views,
+warm-start padding, seeding, Box bounds and batching over envs; an algorithm subclass
+implements only :meth:`BaseSolver._optimize`.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Iterator
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import torch
+
+from ..errors import ConfigError, SpaceError
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["AUTO_BATCH", "BaseSolver"]
+
+
+class _AutoBatch(int):
+    """Default ``batch_size`` of the sampling solvers.
+
+    It equals 1 and prints as 1 (the original signature's default) but means "auto":
+    all envs in one pass, halved on CUDA out-of-memory. Passing a plain ``1`` plans one
+    env per pass, like the original.
+    """
+
+    def __repr__(self) -> str:
+        return "1"
+
+
+AUTO_BATCH = _AutoBatch(1)
+_OOM = getattr(torch, "OutOfMemoryError", torch.cuda.OutOfMemoryError)
+
+
+def _model_tensor(model: Any) -> torch.Tensor | None:
+    """First floating parameter (or buffer) of ``model``, if it is a module."""
+    if isinstance(model, torch.nn.Module):
+        for tensor in (*model.parameters(), *model.buffers()):
+            if tensor.is_floating_point():
+                return tensor
+    return None
+
+
+class BaseSolver:
+    """Plumbing shared by every solver; subclasses implement :meth:`_optimize`.
+
+    - ``batch_size``: most envs planned in one pass. ``None`` or the default
+      :data:`AUTO_BATCH` (which prints as 1) plan all envs together; an explicit int caps
+      the chunk. Noise is drawn per env row, so any chunking gives the same plans.
+    - ``device``: where tensors live; ``None`` follows the model's parameters (else CPU).
+      The dtype follows the model's floating parameters (float32 for parameter-free models).
+    - ``seed``: seeds a private ``torch.Generator``; the same seed gives the same sequence
+      of plans. :meth:`set_seed` restarts the stream.
+    """
+
+    #: name under which the class is registered (set by ``@register_solver``)
+    name: str = ""
+
+    def __init__(
+        self,
+        model: Any,
+        batch_size: int | None = AUTO_BATCH,
+        num_samples: int = 1,
+        var_scale: float = 1.0,
+        device: str | torch.device | None = "cpu",
+        seed: int = 1234,
+        n_steps: int = 1,
+        topk: int | None = None,
+    ):
+        if not callable(getattr(model, "get_cost", None)):
+            raise ConfigError(f"{type(self).__name__} requires a model with get_cost(info, candidates), got {model!r}")
+        if batch_size is not None and (isinstance(batch_size, bool) or int(batch_size) < 1):
+            raise ConfigError(f"{type(self).__name__} requires batch_size >= 1 or None, got {batch_size!r}")
+        self._check_positive(num_samples=num_samples, n_steps=n_steps, topk=num_samples if topk is None else topk)
+        if not var_scale > 0:
+            raise ConfigError(f"{type(self).__name__} requires var_scale > 0, got {var_scale!r}")
+        self.model = model
+        self.batch_size = batch_size
+        self.num_samples = int(num_samples)
+        self.var_scale = float(var_scale)
+        self.n_steps = int(n_steps)
+        self.topk = min(int(topk), self.num_samples) if topk is not None else None
+        self._device_arg = device
+        self.seed = seed
+        self._seed_rng = np.random.default_rng(seed)
+        self._gen: torch.Generator | None = None
+        self._space: gym.Space | None = None
+        self._config: Any = None
+        self._n_envs: int | None = None
+        self._auto_chunk: int | None = None
+        self._rows = (0, 0)
+        self._draw = 0
+        self._solve_seed = 0
+
+    # -- validation helper ------------------------------------------------------------
+    def _check_positive(self, **values: Any) -> None:
+        for key, value in values.items():
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+                raise ConfigError(f"{type(self).__name__} requires {key} to be an integer >= 1, got {value!r}")
+
+    # -- configuration -----------------------------------------------------------------
+    def configure(self, *, action_space: gym.Space, n_envs: int, config: Any) -> None:
+        """Set the batched ``action_space`` (leading dim ``n_envs``) and the ``PlanConfig``."""
+        self._check_positive(n_envs=n_envs)
+        for attr in ("horizon", "action_block"):
+            if not isinstance(getattr(config, attr, None), (int, np.integer)):
+                raise ConfigError(f"{type(self).__name__} requires a PlanConfig with {attr}, got {config!r}")
+        shape = getattr(action_space, "shape", None)
+        if not shape or shape[0] != n_envs:
+            raise SpaceError(
+                f"{type(self).__name__} requires the batched action space with leading dim n_envs={n_envs}, "
+                f"got {action_space!r}"
+            )
+        self._check_space(action_space)
+        self._space, self._config, self._n_envs = action_space, config, int(n_envs)
+        ref = _model_tensor(self.model)
+        if self._device_arg is None:
+            self.device = ref.device if ref is not None else torch.device("cpu")
+        else:
+            self.device = torch.device(self._device_arg)
+        if ref is not None and ref.device.type != self.device.type:
+            raise ConfigError(
+                f"{type(self).__name__} requires the model on its device {self.device}, got parameters on "
+                f"{ref.device}; pass device={str(ref.device)!r} (or device=None) or move the model"
+            )
+        self.dtype = ref.dtype if ref is not None else torch.float32
+        self._gen = torch.Generator(device=self.device)
+        self._auto_chunk = None
+        low, high = self._bounds_arrays(action_space)
+        self._low = torch.as_tensor(low, dtype=self.dtype, device=self.device)
+        self._high = torch.as_tensor(high, dtype=self.dtype, device=self.device)
+        self._bounded = bool(np.isfinite(low).any() or np.isfinite(high).any())
+
+    def _check_space(self, action_space: gym.Space) -> None:
+        """Subclasses restrict the accepted action spaces here (default: Box)."""
+        if not isinstance(action_space, gym.spaces.Box):
+            raise SpaceError(f"{type(self).__name__} requires a Box action space, got {action_space!r}")
+
+    def _bounds_arrays(self, action_space: gym.Space) -> tuple[np.ndarray, np.ndarray]:
+        """Per-env bounds ``(B, A)``: the Box bounds flattened and tiled over ``action_block``."""
+        if not isinstance(action_space, gym.spaces.Box):
+            inf = np.full((self.n_envs, self.action_dim), np.inf)
+            return -inf, inf
+        block = self._config.action_block
+        low = np.tile(action_space.low.reshape(self.n_envs, -1), (1, block)).astype(np.float64)
+        high = np.tile(action_space.high.reshape(self.n_envs, -1), (1, block)).astype(np.float64)
+        return low, high
+
+    def _require_configured(self) -> None:
+        if self._space is None:
+            raise ConfigError(
+                f"{type(self).__name__} requires configure(action_space=..., n_envs=..., config=...) before solve; "
+                "WorldModelPolicy.set_env does it"
+            )
+
+    @property
+    def action_space(self) -> gym.Space | None:
+        """The batched action space given to :meth:`configure` (None before)."""
+        return self._space
+
+    @property
+    def config(self) -> Any:
+        """The ``PlanConfig`` given to :meth:`configure` (None before)."""
+        return self._config
+
+    @property
+    def n_envs(self) -> int | None:
+        """Number of envs (B); None before :meth:`configure`."""
+        return self._n_envs
+
+    @property
+    def horizon(self) -> int | None:
+        """Planned action blocks (H); None before :meth:`configure`."""
+        return None if self._config is None else int(self._config.horizon)
+
+    @property
+    def action_dim(self) -> int | None:
+        """``prod(single action shape) * action_block`` (A); None before :meth:`configure`."""
+        if self._space is None:
+            return None
+        return int(math.prod(self._space.shape[1:])) * int(self._config.action_block)
+
+    def set_seed(self, seed: int) -> None:
+        """Restart the random stream: the next plans repeat those after construction."""
+        self.seed = seed
+        self._seed_rng = np.random.default_rng(seed)
+
+    # -- solving ------------------------------------------------------------------------
+    def __call__(self, info_dict: dict, init_action: torch.Tensor | None = None) -> dict:
+        return self.solve(info_dict, init_action=init_action)
+
+    def solve(self, info_dict: dict, init_action: torch.Tensor | None = None) -> dict:
+        """Plan for every env.
+
+        ``info_dict`` entries are ``(B, ...)`` (tensors or numpy arrays; numeric ones are
+        moved to the solver's device, floating ones cast to its dtype, strings left alone).
+        ``init_action: (B, k, A)`` with ``k <= H`` warm-starts the plan (the last ``H - k``
+        blocks are padded). Returns ``actions: (B, H, A)`` and ``costs: (B,)`` on the CPU,
+        plus what the algorithm adds.
+        """
+        self._require_configured()
+        info = {key: self._to_device(value) for key, value in info_dict.items()}
+        init = self._pad_init(init_action)
+        self._solve_seed = int(self._seed_rng.integers(0, 2**62))
+        while True:
+            try:
+                parts = [self._optimize_rows(info, init, start, stop) for start, stop in self._chunks()]
+                break
+            except _OOM:
+                chunk = self._chunk_size()
+                if self.batch_size not in (None, AUTO_BATCH) or chunk == 1:
+                    raise
+                self._auto_chunk = max(chunk // 2, 1)
+                logger.warning("%s ran out of memory; planning %d envs per pass", type(self).__name__, self._auto_chunk)
+                if self.device.type == "cuda":
+                    torch.cuda.empty_cache()
+        out = {}
+        for key in parts[0]:
+            values = [part[key] for part in parts]
+            out[key] = torch.cat(values).cpu() if torch.is_tensor(values[0]) else values
+        return out
+
+    def _optimize_rows(self, info: dict, init: torch.Tensor | None, start: int, stop: int) -> dict:
+        self._rows, self._draw = (start, stop), 0
+        rows = {key: self._slice(value, start, stop) for key, value in info.items()}
+        sub_init = None if init is None else init[start:stop]
+        return self._optimize(rows, sub_init)
+
+    def _optimize(self, info: dict, init_action: torch.Tensor | None) -> dict:
+        """The algorithm: ``info`` rows ``(b, ...)``, ``init_action: (b, H, A)`` or None.
+
+        Returns a dict with ``actions: (b, H, A)``, ``costs: (b,)`` and optional extras,
+        all tensors with leading dim b (kept on the device; the base moves them to the CPU).
+        """
+        raise NotImplementedError("_optimize(info, init_action) -> {'actions': (b, H, A), 'costs': (b,)}")
+
+    def _chunk_size(self) -> int:
+        if self.batch_size is None or self.batch_size is AUTO_BATCH:
+            return self._auto_chunk or self.n_envs
+        return min(int(self.batch_size), self.n_envs)
+
+    def _chunks(self) -> Iterator[tuple[int, int]]:
+        size = self._chunk_size()
+        for start in range(0, self.n_envs, size):
+            yield start, min(start + size, self.n_envs)
+
+    # -- tensors --------------------------------------------------------------------------
+    def _to_device(self, value: Any) -> Any:
+        if isinstance(value, np.ndarray) and value.dtype.kind in "biuf":
+            value = torch.from_numpy(np.ascontiguousarray(value))
+        if torch.is_tensor(value):
+            dtype = self.dtype if value.is_floating_point() else value.dtype
+            return value.to(device=self.device, dtype=dtype, non_blocking=True)
+        return value
+
+    def _slice(self, value: Any, start: int, stop: int) -> Any:
+        if (start, stop) == (0, self.n_envs) or not self._is_batched(value):
+            return value
+        return value[start:stop]
+
+    def _is_batched(self, value: Any) -> bool:
+        return isinstance(value, (torch.Tensor, np.ndarray)) and value.ndim >= 1 and value.shape[0] == self.n_envs
+
+    def _expand(self, info: dict, num_samples: int) -> dict:
+        """Rows ``(b, ...)`` -> ``(b, S, ...)`` views (torch ``expand`` / numpy ``broadcast_to``)."""
+        b = self._rows[1] - self._rows[0]
+        out = {}
+        for key, value in info.items():
+            if torch.is_tensor(value) and value.ndim >= 1 and value.shape[0] == b:
+                value = value.unsqueeze(1).expand(b, num_samples, *value.shape[1:])
+            elif isinstance(value, np.ndarray) and value.ndim >= 1 and value.shape[0] == b:
+                value = np.broadcast_to(value[:, None], (b, num_samples, *value.shape[1:]))
+            out[key] = value
+        return out
+
+    def _cost(self, info: dict, candidates: torch.Tensor) -> torch.Tensor:
+        """``model.get_cost`` on ``candidates: (b, S, H, A)`` -> ``(b, S)`` (shape-checked)."""
+        costs = self.model.get_cost(info, candidates)
+        b, s = candidates.shape[:2]
+        if tuple(costs.shape) != (b, s):
+            if costs.numel() != b * s:
+                raise ConfigError(
+                    f"{type(self).__name__} requires get_cost to return costs of shape {(b, s)}, "
+                    f"got {tuple(costs.shape)}"
+                )
+            costs = costs.reshape(b, s)
+        return costs
+
+    def _pad_init(self, init_action: Any) -> torch.Tensor | None:
+        """``(B, k, A)`` with ``k <= H`` -> ``(B, H, A)`` on the device, zero-padded and clamped."""
+        if init_action is None:
+            return None
+        init = torch.as_tensor(init_action).to(device=self.device, dtype=self.dtype)
+        b, h, a = self.n_envs, self.horizon, self.action_dim
+        if init.ndim != 3 or init.shape[0] != b or init.shape[2] != a or init.shape[1] > h:
+            raise ConfigError(
+                f"{type(self).__name__} requires init_action of shape ({b}, k <= {h}, {a}), got {tuple(init.shape)}"
+            )
+        if init.shape[1] < h:
+            init = torch.cat([init, init.new_zeros(b, h - init.shape[1], a)], dim=1)
+        return self._clamp(init, (0, b))
+
+    def _initial_mean(self, init_action: torch.Tensor | None) -> torch.Tensor:
+        """Warm start, else zeros clamped into the bounds, for the current rows: ``(b, H, A)``."""
+        if init_action is not None:
+            return init_action.clone()
+        start, stop = self._rows
+        return self._clamp(torch.zeros(stop - start, self.horizon, self.action_dim, device=self.device, dtype=self.dtype))
+
+    def _bounds_like(self, x: torch.Tensor, rows: tuple[int, int] | None) -> tuple[torch.Tensor, torch.Tensor]:
+        """Bounds of ``rows`` (default: the current rows) shaped to broadcast against ``x: (b, ..., A)``."""
+        start, stop = rows or self._rows
+        shape = (x.shape[0],) + (1,) * (x.ndim - 2) + (x.shape[-1],)
+        return self._low[start:stop].reshape(shape), self._high[start:stop].reshape(shape)
+
+    def _clamp(self, x: torch.Tensor, rows: tuple[int, int] | None = None) -> torch.Tensor:
+        """Clamp ``(b, ..., A)`` into the Box bounds of ``rows`` (default: the current rows)."""
+        return torch.clamp(x, *self._bounds_like(x, rows)) if self._bounded else x
+
+    def _clamp_(self, x: torch.Tensor) -> torch.Tensor:
+        """In-place :meth:`_clamp` for the current rows (for freshly made tensors)."""
+        return x.clamp_(*self._bounds_like(x, None)) if self._bounded else x
+
+    def _reseed(self) -> torch.Generator:
+        """The generator for the next draw, seeded by (solve, draw index): chunking-invariant."""
+        self._gen.manual_seed((self._solve_seed * 1_000_003 + self._draw) % (2**63))
+        self._draw += 1
+        return self._gen
+
+    def _randn(self, *tail: int) -> torch.Tensor:
+        """Standard normal noise for the current rows: ``(b, *tail)``."""
+        gen = self._reseed()
+        full = torch.randn((self.n_envs, *tail), generator=gen, device=self.device, dtype=self.dtype)
+        start, stop = self._rows
+        return full if (start, stop) == (0, self.n_envs) else full[start:stop]
+
+    def _rand(self, *tail: int) -> torch.Tensor:
+        """Uniform ``[0, 1)`` noise for the current rows: ``(b, *tail)``."""
+        gen = self._reseed()
+        full = torch.rand((self.n_envs, *tail), generator=gen, device=self.device, dtype=self.dtype)
+        start, stop = self._rows
+        return full if (start, stop) == (0, self.n_envs) else full[start:stop]
+
+    def _elites(self, candidates: torch.Tensor, costs: torch.Tensor, k: int) -> tuple[torch.Tensor, torch.Tensor]:
+        """The ``k`` cheapest candidates, cheapest first: costs ``(b, k)`` and plans ``(b, k, H, A)``."""
+        elite_costs, idx = torch.topk(costs, k, dim=1, largest=False, sorted=True)
+        elites = candidates.gather(1, idx[:, :, None, None].expand(-1, -1, *candidates.shape[2:]))
+        return elite_costs, elites
+
+    def _gaussian_start(self, info: dict, init_action: torch.Tensor | None) -> tuple[torch.Tensor, torch.Tensor, dict]:
+        """Start of a sampling solver: ``mean (b, H, A)``, ``std = var_scale`` and the info expanded to S."""
+        mean = self._initial_mean(init_action)
+        return mean, torch.full_like(mean, self.var_scale), self._expand(info, self.num_samples)
+
+    def _sample_elites(self, info_s: dict, mean: torch.Tensor, std: torch.Tensor, k: int) -> tuple[torch.Tensor, torch.Tensor]:
+        """One Gaussian round: sample ``num_samples`` around ``mean``, score, return the ``k`` elites."""
+        candidates = self._sample_around(mean, std, self.num_samples)
+        return self._elites(candidates, self._cost(info_s, candidates), k)
+
+    def _sample_around(self, mean: torch.Tensor, std: torch.Tensor, num_samples: int) -> torch.Tensor:
+        """Gaussian candidates ``(b, S, H, A)`` around ``mean: (b, H, A)``; candidate 0 is the mean."""
+        noise = self._randn(num_samples, self.horizon, self.action_dim)
+        noise[:, 0] = 0
+        candidates = torch.addcmul(mean.unsqueeze(1), std.unsqueeze(1), noise, out=noise)
+        return self._clamp_(candidates)
+
+    def __repr__(self) -> str:
+        return (
+            f"{type(self).__name__}(num_samples={self.num_samples}, "
+            f"batch_size={'auto' if self.batch_size is AUTO_BATCH else self.batch_size!r}, "
+            f"device={self._device_arg!r}, seed={self.seed})"
+        )
