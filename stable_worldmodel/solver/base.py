@@ -354,6 +354,12 @@ class BaseSolver:
         elites = candidates.gather(1, idx[:, :, None, None].expand(-1, -1, *candidates.shape[2:]))
         return elite_costs, elites
 
+    @staticmethod
+    def _mean_std(elites: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """Mean and (biased) std of ``elites: (b, k, H, A)`` over k (faster than ``Tensor.std`` on CPU)."""
+        mean = elites.mean(dim=1)
+        return mean, (elites - mean.unsqueeze(1)).square().mean(dim=1).sqrt()
+
     def _gaussian_start(self, info: dict, init_action: torch.Tensor | None) -> tuple[torch.Tensor, torch.Tensor, dict]:
         """Start of a sampling solver: ``mean (b, H, A)``, ``std = var_scale`` and the info expanded to S."""
         mean = self._initial_mean(init_action)

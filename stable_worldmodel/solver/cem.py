@@ -56,5 +56,5 @@ class CEMSolver(BaseSolver):
         mean, std, info_s = self._gaussian_start(info, init_action)
         for _ in range(self.n_steps):
             elite_costs, elites = self._sample_elites(info_s, mean, std, self.topk)
-            mean, std = elites.mean(dim=1), elites.std(dim=1, unbiased=False)
+            mean, std = self._mean_std(elites)
         return {"actions": mean, "costs": elite_costs[:, 0], "mean": mean, "var": std}

@@ -82,6 +82,7 @@ class ICEMSolver(BaseSolver):
             best = torch.where(better[:, None, None], elites[:, 0], best)
             best_cost = torch.minimum(elite_costs[:, 0], best_cost)
             kept = elites[:, : self.n_keep] if self.n_keep else None
-            mean = self.momentum * mean + (1 - self.momentum) * elites.mean(dim=1)
-            std = self.momentum * std + (1 - self.momentum) * elites.std(dim=1, unbiased=False)
+            fit_mean, fit_std = self._mean_std(elites)
+            mean = torch.lerp(fit_mean, mean, self.momentum)
+            std = torch.lerp(fit_std, std, self.momentum)
         return {"actions": best, "costs": best_cost, "mean": mean, "var": std}
