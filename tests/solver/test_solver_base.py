@@ -11,13 +11,14 @@ import pytest
 import torch
 from _analytic import Bowl, configure, targets
 
-from stable_worldmodel.errors import ConfigError, SpaceError, UnknownNameError
+from stable_worldmodel.errors import ConfigError, DependencyNotInstalled, SpaceError, UnknownNameError
 from stable_worldmodel.policy import PlanConfig
 from stable_worldmodel.solver import (
     AUTO_BATCH,
     BaseSolver,
     CEMSolver,
     GradientSolver,
+    NevergradSolver,
     PGDSolver,
     Solver,
     list_solvers,
@@ -241,6 +242,12 @@ def test_registry_names_lookup_and_custom_solvers():
     assert torch.equal(solver.solve({})["actions"], torch.zeros(2, 2, 2))
     with pytest.raises(ConfigError, match="free name"):
         register_solver("test-zero")(type("Other", (BaseSolver,), {}))
+
+
+def test_nevergrad_without_the_extra_gives_the_pip_command(monkeypatch):
+    monkeypatch.setitem(sys.modules, "nevergrad", None)
+    with pytest.raises(DependencyNotInstalled, match=r"stable-worldmodel\[nevergrad\]"):
+        NevergradSolver(Bowl())
 
 
 def test_importing_the_package_is_light():
