@@ -34,6 +34,9 @@ class _AutoBatch(int):
     def __repr__(self) -> str:
         return "1"
 
+    def __reduce__(self) -> str:
+        return "AUTO_BATCH"  # pickle/copy keep the singleton
+
 
 AUTO_BATCH = _AutoBatch(1)
 _OOM = getattr(torch, "OutOfMemoryError", torch.cuda.OutOfMemoryError)
@@ -215,7 +218,7 @@ class BaseSolver:
                 break
             except _OOM:
                 chunk = self._chunk_size()
-                if self.batch_size not in (None, AUTO_BATCH) or chunk == 1:
+                if not self._auto_batch or chunk == 1:
                     raise
                 self._auto_chunk = max(chunk // 2, 1)
                 logger.warning("%s ran out of memory; planning %d envs per pass", type(self).__name__, self._auto_chunk)
@@ -241,8 +244,13 @@ class BaseSolver:
         """
         raise NotImplementedError("_optimize(info, init_action) -> {'actions': (b, H, A), 'costs': (b,)}")
 
+    @property
+    def _auto_batch(self) -> bool:
+        """True when all envs go in one pass (``batch_size`` None or the default :data:`AUTO_BATCH`)."""
+        return self.batch_size is None or self.batch_size is AUTO_BATCH
+
     def _chunk_size(self) -> int:
-        if self.batch_size is None or self.batch_size is AUTO_BATCH:
+        if self._auto_batch:
             return self._auto_chunk or self.n_envs
         return min(int(self.batch_size), self.n_envs)
 

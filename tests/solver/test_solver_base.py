@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 import subprocess
 import sys
 
@@ -160,6 +161,7 @@ def test_batch_size_chunks_give_the_same_plans(name):
 def test_batch_size_default_is_auto_and_explicit_one_is_env_by_env():
     assert CEMSolver(Bowl()).batch_size is AUTO_BATCH and AUTO_BATCH == 1 and repr(AUTO_BATCH) == "1"
     assert "batch_size='auto'" in repr(CEMSolver(Bowl()))
+    assert copy.deepcopy(CEMSolver(Bowl())).batch_size is AUTO_BATCH
     model = Bowl()
     configure(CEMSolver(model, batch_size=1, **FAST["cem"]), n_envs=3).solve(targets([[0.0, 0.0]] * 3))
     assert {shape[0] for _, shape in model.calls} == {1}
