@@ -361,3 +361,11 @@ def test_works_in_world_with_the_registered_expert():
     assert world.infos[keys.STATE].shape[::2] == (2, 7) and world.infos[keys.GOAL].shape[-3:] == (64, 64, 3)
     result = world.evaluate(episodes=2, seed=0)
     assert result["success_rate"] >= 50.0
+
+
+def test_resolution_alias_of_the_original_release():
+    import gymnasium as gym
+
+    env = gym.make("swm/PushT-v1", resolution=48, disable_env_checker=True)
+    env.reset(seed=0)
+    assert env.render().shape == (48, 48, 3)

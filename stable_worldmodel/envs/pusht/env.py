@@ -89,7 +89,10 @@ class PushT(DatasetResetMixin, PushTPhysics, gym.Env):
         render_mode: str | None = "rgb_array",
         render_size: tuple[int, int] = (224, 224),
         action_scale: float = 100.0,
+        resolution: int | None = None,
     ):
+        if resolution is not None:  # the original release's name for a square render size
+            render_size = (resolution, resolution)
         if render_mode not in (None, "rgb_array"):
             raise ConfigError(f"PushT requires render_mode 'rgb_array' or None, got {render_mode!r}")
         if not float(action_scale) > 0:
