@@ -33,6 +33,7 @@ def make_world_env(
     goal_conditioned: bool,
     extra_wrappers: Sequence[Callable] | None,
     env_kwargs: dict[str, Any],
+    goal_shape: tuple[int, int] | None = None,
 ) -> gym.Env:
     """One env as World uses it: ``gym.make`` + ``extra_wrappers`` + :class:`MegaWrapper`."""
     kwargs = dict(env_kwargs)
@@ -48,6 +49,7 @@ def make_world_env(
         separate_goal=goal_conditioned,
         history_size=history_size,
         frame_skip=frame_skip,
+        goal_shape=goal_shape,
     )
 
 
@@ -68,6 +70,7 @@ class World:
     ``"auto"`` (default: worker processes when there are enough envs and cores), ``"sync"``
     (all envs in this process) or ``"async"``; both give identical results for the same seeds.
     ``frame_skip`` spaces the stacked history frames; each :meth:`step` is one env step.
+    ``goal_shape`` (seed 000's argument) draws ``goal`` images at another (H, W).
     """
 
     def __init__(
@@ -97,6 +100,9 @@ class World:
         self.verbose = verbose
         self.goal_conditioned = goal_conditioned
         mode = kwargs.pop("vectorization_mode", "auto")
+        # seed 000's World took goal_shape; keep accepting it (goal images at another size)
+        goal_shape = kwargs.pop("goal_shape", None)
+        goal_shape = check_shape("World goal_shape", goal_shape) if goal_shape is not None else None
         factory = partial(
             make_world_env,
             env_name,
@@ -109,6 +115,7 @@ class World:
             goal_conditioned,
             list(extra_wrappers or []),
             kwargs,
+            goal_shape,
         )
         self._vec = VecEnv(factory, n, mode=mode)
         self.envs = self._vec

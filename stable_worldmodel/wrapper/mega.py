@@ -25,6 +25,7 @@ class MegaWrapper(gym.Wrapper):
     - ``separate_goal``: require ``info["goal"]`` after reset (goal-conditioned envs).
     - ``history_size`` / ``frame_skip``: every info entry gets a history axis ``(T, ...)`` of the
       last ``history_size`` values spaced ``frame_skip`` steps apart.
+    - ``goal_shape``: (H, W) of ``goal`` when it should differ from ``image_shape``.
     """
 
     def __init__(
@@ -37,13 +38,14 @@ class MegaWrapper(gym.Wrapper):
         separate_goal: Iterable | bool | None = True,
         history_size: int = 1,
         frame_skip: int = 1,
+        goal_shape: tuple[int, int] | None = None,
     ):
         required = [PIXELS_PATTERN, *(required_keys or [])]
         env = AddPixelsWrapper(env, image_shape, pixels_transform)
         env = EverythingToInfoWrapper(env)
         env = EnsureInfoKeysWrapper(env, required)
         env = EnsureGoalInfoWrapper(env, check_reset=bool(separate_goal), check_step=False)
-        env = ResizeGoalWrapper(env, image_shape, goal_transform)
+        env = ResizeGoalWrapper(env, goal_shape or image_shape, goal_transform)
         env = StackedWrapper(env, None, history_size=history_size, frameskip=frame_skip)
         super().__init__(env)
         self.image_shape = tuple(image_shape)

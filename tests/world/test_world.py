@@ -215,3 +215,10 @@ def test_evaluate_unknown_eval_key():
 def test_describe_mentions_spaces():
     text = make(1).describe()
     assert TOY in text and "action" in text
+
+
+def test_goal_shape_of_seed_000():
+    world = make(1, goal_shape=(8, 12))
+    world.reset(seed=0)
+    assert world.infos[keys.PIXELS].shape == (1, 1, 16, 16, 3)
+    assert world.infos[keys.GOAL].shape == (1, 1, 8, 12, 3)
