@@ -6,8 +6,9 @@ Importing this package is cheap; each solver class (and torch) is imported on fi
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from .._lazy import lazy_getattr
 
 from ._registry import get_solver_class, list_solvers, make_solver, register_solver
 
@@ -29,12 +30,7 @@ _ATTRS = {
 __all__ = ["get_solver_class", "list_solvers", "make_solver", "register_solver", *_ATTRS]
 
 
-def __getattr__(name: str) -> Any:
-    if name not in _ATTRS:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{_ATTRS[name]}"), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_getattr(__name__, {name: f".{module}" for name, module in _ATTRS.items()})
 
 
 def __dir__() -> list[str]:
