@@ -54,6 +54,7 @@ def evaluate(world: World, episodes: int = 10, eval_keys=None, seed: int | None 
             raise unknown_name("eval key", key, world.infos)
 
     successes = np.zeros(episodes, bool)
+    finished_mask = np.zeros(episodes, bool)
     lengths = np.zeros(episodes, np.int64)
     collected: dict[str, list] = {k: [None] * episodes for k in eval_keys}
     slot = np.full(n, -1, np.int64)  # episode index each env is playing (-1: none)
@@ -70,12 +71,13 @@ def evaluate(world: World, episodes: int = 10, eval_keys=None, seed: int | None 
             for env in finished:
                 ep = slot[env]
                 successes[ep] = bool(world.terminateds[env])
+                finished_mask[ep] = True
                 lengths[ep] = int(np.asarray(world.infos[keys.STEP_IDX])[env, -1])
                 for k in eval_keys:
                     collected[k][ep] = np.asarray(world.infos[k][env, -1]).copy()
                 done_count += 1
                 if dump_every > 0 and done_count % dump_every == 0:
-                    _dump(world, seed, successes, seeds, done_count)
+                    _dump(world, seed, successes, seeds, finished_mask)
             bar.update(len(finished))
             restart, restart_seeds = [], []
             for env in finished:
@@ -102,12 +104,21 @@ def evaluate(world: World, episodes: int = 10, eval_keys=None, seed: int | None 
     return results
 
 
-def _dump(world: World, seed, successes, seeds, done: int) -> None:
+def _dump(world: World, seed, successes, seeds, finished) -> None:
+    """Write the finished episodes so far (seed and success of each) as JSON, atomically."""
     from ..data import get_cache_dir
 
     path = get_cache_dir() / "evaluations" / f"{world.env_name.replace('/', '_')}_{seed}.json"
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_suffix(".json.tmp")
-    tmp.write_text(json.dumps({"env": world.env_name, "episodes_done": done, "seeds": [int(s) for s in seeds], "successes": successes.tolist()}))
+    done = np.flatnonzero(finished)
+    payload = {
+        "env": world.env_name,
+        "episodes_done": len(done),
+        "episodes_total": len(seeds),
+        "seeds": [int(seeds[k]) for k in done],
+        "successes": [bool(successes[k]) for k in done],
+    }
+    tmp.write_text(json.dumps(payload))
     tmp.replace(path)
     logger.info("evaluation progress written to %s", path)

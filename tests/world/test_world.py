@@ -222,3 +222,15 @@ def test_goal_shape_of_seed_000():
     world.reset(seed=0)
     assert world.infos[keys.PIXELS].shape == (1, 1, 16, 16, 3)
     assert world.infos[keys.GOAL].shape == (1, 1, 8, 12, 3)
+
+
+def test_evaluate_dump_every_writes_finished_episodes(_stablewm_home):
+    import json
+
+    world = make(2, max_episode_steps=4)
+    world.set_policy(RandomPolicy(seed=0))
+    world.evaluate(episodes=5, seed=7, dump_every=2)
+    dump = json.loads((_stablewm_home / "evaluations" / "swm_Toy-v0_7.json").read_text())
+    assert dump["episodes_total"] == 5
+    assert dump["episodes_done"] == len(dump["seeds"]) == len(dump["successes"]) == 4  # last dump after 4
+    assert set(dump["seeds"]) <= set(range(7, 12))
