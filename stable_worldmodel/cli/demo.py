@@ -59,6 +59,9 @@ def plot_success_rates(summaries: Sequence[SuccessSummary], path: Path, title: s
     return path
 
 
+VIDEO_MIN_SIZE = 224
+
+
 def _record_rollout(env: str, policy: str, path: Path, seed: int, image_size: int, max_steps: int) -> Path:
     """One MP4 of ``policy`` on the episode of seed ``seed`` (the first evaluation episode)."""
     from .worlds import make_policy, make_world
@@ -125,7 +128,8 @@ def demo(
     con.print(success_table(f"{env}: seeds {eval_seed}..{eval_seed + eval_episodes - 1}, at most {max_steps} steps", summaries))
 
     con.rule("[3/4] Recording one rollout video per policy")
-    videos = [_record_rollout(env, p, out / f"{p}.mp4", eval_seed, image_size, max_steps) for p in POLICY_ORDER]
+    video_size = max(image_size, VIDEO_MIN_SIZE)  # the envs draw at any size: make the videos legible
+    videos = [_record_rollout(env, p, out / f"{p}.mp4", eval_seed, video_size, max_steps) for p in POLICY_ORDER]
     con.print("Videos: " + ", ".join(str(v) for v in videos), soft_wrap=True)
 
     con.rule("[4/4] Plotting success rates with 95% confidence intervals")
