@@ -234,3 +234,42 @@ def test_evaluate_dump_every_writes_finished_episodes(_stablewm_home):
     assert dump["episodes_total"] == 5
     assert dump["episodes_done"] == len(dump["seeds"]) == len(dump["successes"]) == 4  # last dump after 4
     assert set(dump["seeds"]) <= set(range(7, 12))
+
+
+class _ExplodingStep:
+    """A wrapper factory whose env fails on the third step."""
+
+    def __call__(self, env):
+        import gymnasium as gym
+
+        class Exploding(gym.Wrapper):
+            calls = 0
+
+            def step(self, action):
+                Exploding.calls += 1
+                if Exploding.calls == 3:
+                    raise ValueError("boom in the env")
+                return self.env.step(action)
+
+        return Exploding(env)
+
+
+@pytest.mark.parametrize("mode", ["sync", "async"])
+def test_env_errors_surface_with_their_message(mode):
+    world = make(2, vectorization_mode=mode, extra_wrappers=[_ExplodingStep()])
+    world.set_policy(RandomPolicy(seed=0))
+    world.reset(seed=0)
+    world.step()
+    with pytest.raises((ValueError, RuntimeError), match="boom in the env"):
+        for _ in range(3):
+            world.step()
+    world.close()
+
+
+def test_async_world_close_stops_workers():
+    world = make(2, vectorization_mode="async")
+    procs = list(world.envs._procs)
+    assert all(p.is_alive() for p in procs)
+    world.close()
+    assert not any(p.is_alive() for p in procs)
+    world.close()  # idempotent
