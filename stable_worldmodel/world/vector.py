@@ -8,11 +8,13 @@ Autoreset never happens: an env is reset only when :meth:`VecEnv.reset_envs` ask
 
 from __future__ import annotations
 
+import atexit
 import logging
 import multiprocessing as mp
 import os
 import sys
 import traceback
+import weakref
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -204,6 +206,9 @@ class VecEnv:
             child.close()
             self._conns.append(parent)
             self._procs.append(proc)
+        # close gracefully at exit, before multiprocessing terminates its daemon workers (which
+        # would leave their shared memory to the resource tracker)
+        atexit.register(_close_at_exit, weakref.ref(self))
         replies = [self._recv(c) for c in self._conns]
         variation = []
         for reply in replies:
@@ -320,21 +325,32 @@ class VecEnv:
         for conn, proc in zip(self._conns, self._procs):
             try:
                 if not terminate and proc.is_alive():
-                    conn.send(("close", ()))
-                    conn.recv()
+                    conn.send(("close", ()))  # the worker unlinks its shared memory and exits
+                    if conn.poll(5.0):
+                        conn.recv()
             except (BrokenPipeError, EOFError, OSError):
                 pass
             conn.close()
+        for proc in self._procs:
+            if terminate:  # forked siblings hold copies of each other's pipes: no EOF to wait for
+                proc.terminate()
             proc.join(timeout=2)
             if proc.is_alive():
-                proc.terminate()
+                proc.kill()
+                proc.join()
         self._reader.close()
 
     def __del__(self):
         try:
-            self.close(terminate=True)
+            self.close()
         except Exception:  # interpreter shutdown
             pass
+
+
+def _close_at_exit(ref: weakref.ref) -> None:
+    vec = ref()
+    if vec is not None:
+        vec.close()
 
 
 def _concat_obs(parts: list) -> Any:
