@@ -85,18 +85,6 @@ class ConcatDataset(Dataset):
         if keys_to_load is not None:
             self.check_keys(keys_to_load)
 
-    @property
-    def column_names(self) -> list[str]:
-        return list(self._columns)
-
-    @property
-    def lengths(self) -> np.ndarray:
-        return self._lengths
-
-    @property
-    def offsets(self) -> np.ndarray:
-        return self._offsets
-
     def _read(self, col: str, start: int, stop: int) -> np.ndarray:
         ep = int(np.searchsorted(self._offsets, start, side="right") - 1)
         d = int(np.searchsorted(self._first_ep, ep, side="right") - 1)

@@ -71,18 +71,24 @@ class Dataset(_TorchDataset):
         self._keys_to_load = None if keys_to_load is None else list(keys_to_load)
         self._index: tuple[np.ndarray, np.ndarray] | None = None
 
-    # -- to implement -------------------------------------------------------------------------
+    # -- to implement (or set ``_columns``, ``_lengths`` and ``_offsets`` in ``__init__``) -----
     @property
     def column_names(self) -> list[str]:
-        raise NotImplementedError("column_names -> list[str]")
+        if not hasattr(self, "_columns"):
+            raise NotImplementedError("column_names -> list[str] (or set self._columns)")
+        return list(self._columns)
 
     @property
     def lengths(self) -> np.ndarray:
-        raise NotImplementedError("lengths -> (E,) int array of rows per episode")
+        if not hasattr(self, "_lengths"):
+            raise NotImplementedError("lengths -> (E,) int array of rows per episode (or set self._lengths)")
+        return self._lengths
 
     @property
     def offsets(self) -> np.ndarray:
-        raise NotImplementedError("offsets -> (E,) int array of first rows")
+        if not hasattr(self, "_offsets"):
+            raise NotImplementedError("offsets -> (E,) int array of first rows (or set self._offsets)")
+        return self._offsets
 
     def _read(self, col: str, start: int, stop: int) -> np.ndarray:
         raise NotImplementedError("_read(col, start, stop) -> rows start:stop of col")

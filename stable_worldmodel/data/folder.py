@@ -73,14 +73,6 @@ class _DirectoryDataset(Dataset):
     def column_names(self) -> list[str]:
         return sorted([*self._arrays, *self._images])
 
-    @property
-    def lengths(self) -> np.ndarray:
-        return self._lengths
-
-    @property
-    def offsets(self) -> np.ndarray:
-        return self._offsets
-
     def _read(self, col: str, start: int, stop: int) -> np.ndarray:
         if col in self._arrays:
             return self._arrays[col][start:stop]

@@ -148,18 +148,6 @@ class HDF5Dataset(Dataset):
         return max(chunk, (BLOCK_BYTES // row_bytes) // chunk * chunk)
 
     # -- Dataset interface --------------------------------------------------------------------
-    @property
-    def column_names(self) -> list[str]:
-        return list(self._columns)
-
-    @property
-    def lengths(self) -> np.ndarray:
-        return self._lengths
-
-    @property
-    def offsets(self) -> np.ndarray:
-        return self._offsets
-
     def column_shape(self, col: str) -> tuple[tuple[int, ...], np.dtype]:
         """Per-row shape and dtype of ``col``."""
         self.check_keys([col])
