@@ -12,7 +12,24 @@ from ..errors import ConfigError
 from .dataset import Dataset, to_tensors
 
 
-class MergeDataset(Dataset):
+class _CompositeDataset(Dataset):
+    """A dataset built from others: keeps them in ``datasets`` (at least one)."""
+
+    def __init__(
+        self,
+        datasets: Sequence[Dataset],
+        frameskip: int = 1,
+        num_steps: int = 1,
+        transform: Callable[[dict], dict] | None = None,
+        keys_to_load: Sequence[str] | None = None,
+    ):
+        super().__init__(frameskip=frameskip, num_steps=num_steps, transform=transform, keys_to_load=keys_to_load)
+        self.datasets = list(datasets)
+        if not self.datasets:
+            raise ConfigError(f"{type(self).__name__} requires at least one dataset, got none")
+
+
+class MergeDataset(_CompositeDataset):
     """Columns of several datasets over the same steps (same episode lengths).
 
     A column present in several datasets is taken from the first one that has it.
@@ -26,10 +43,7 @@ class MergeDataset(Dataset):
         transform: Callable[[dict], dict] | None = None,
         keys_to_load: Sequence[str] | None = None,
     ):
-        super().__init__(frameskip=frameskip, num_steps=num_steps, transform=transform, keys_to_load=keys_to_load)
-        self.datasets = list(datasets)
-        if not self.datasets:
-            raise ConfigError("MergeDataset requires at least one dataset, got none")
+        super().__init__(datasets, frameskip, num_steps, transform, keys_to_load)
         ref = np.asarray(self.datasets[0].lengths)
         for i, ds in enumerate(self.datasets[1:], start=1):
             if not np.array_equal(np.asarray(ds.lengths), ref):
@@ -62,7 +76,7 @@ class MergeDataset(Dataset):
         return owner._read(col, start + shift, stop + shift)
 
 
-class ConcatDataset(Dataset):
+class ConcatDataset(_CompositeDataset):
     """Episodes of several datasets one after the other (columns: those common to all)."""
 
     def __init__(
@@ -73,10 +87,7 @@ class ConcatDataset(Dataset):
         transform: Callable[[dict], dict] | None = None,
         keys_to_load: Sequence[str] | None = None,
     ):
-        super().__init__(frameskip=frameskip, num_steps=num_steps, transform=transform, keys_to_load=keys_to_load)
-        self.datasets = list(datasets)
-        if not self.datasets:
-            raise ConfigError("ConcatDataset requires at least one dataset, got none")
+        super().__init__(datasets, frameskip, num_steps, transform, keys_to_load)
         common = [c for c in self.datasets[0].column_names if all(c in d.column_names for d in self.datasets[1:])]
         self._columns = common
         self._lengths = np.concatenate([np.asarray(d.lengths, np.int64) for d in self.datasets])

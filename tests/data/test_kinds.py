@@ -106,3 +106,12 @@ def test_goal_dataset(h5):
         GoalDataset(h5, goal_probabilities=(0.5, 0.6, 0))
     with pytest.raises(KeyError):
         GoalDataset(h5, goal_keys={"nope": "goal_nope"})
+
+
+@pytest.mark.parametrize("cls_name", ["MergeDataset", "ConcatDataset"])
+def test_composites_require_a_dataset(cls_name):
+    from stable_worldmodel import data
+    from stable_worldmodel.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=f"{cls_name} requires at least one dataset"):
+        getattr(data, cls_name)([])

@@ -9,6 +9,17 @@ import numpy as np
 from stable_worldmodel import keys
 
 
+def run_actions(env, seed: int, actions, options=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Reset with ``seed``/``options``, play ``actions``: frames (T+1, H, W, 3), states (T+1, D), goal image."""
+    obs, info = env.reset(seed=seed, options=options)
+    frames, states = [env.render()], [obs[keys.STATE]]
+    for a in actions:
+        obs, *_ = env.step(a)
+        frames.append(env.render())
+        states.append(obs[keys.STATE])
+    return np.stack(frames), np.stack(states), info[keys.GOAL]
+
+
 def factor_value(env, name: str) -> np.ndarray:
     """The current value of the dotted factor ``name`` of ``env.variation_space``."""
     v = env.variation_space.value

@@ -13,6 +13,7 @@ from env_checks import (
     assert_factor_changes_episode,
     assert_render_size,
     count_draws,
+    run_actions,
 )
 from stable_worldmodel import keys
 from stable_worldmodel.envs.image_positioning.env import (
@@ -33,14 +34,8 @@ def make_env(**kwargs) -> ImagePositioningEnv:
 
 
 def rollout(env, seed, options=None, n_steps=4):
-    obs, info = env.reset(seed=seed, options=options)
     actions = np.random.default_rng(0).uniform(-1, 1, (n_steps, env.action_space.shape[0]))
-    frames, states = [env.render()], [obs[keys.STATE]]
-    for a in actions:
-        obs, *_ = env.step(a)
-        frames.append(env.render())
-        states.append(obs[keys.STATE])
-    return np.stack(frames), np.stack(states), info[keys.GOAL]
+    return run_actions(env, seed, actions, options)
 
 
 def test_check_env_passes():

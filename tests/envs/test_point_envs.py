@@ -16,6 +16,7 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import stable_worldmodel as swm
+from env_checks import run_actions
 from stable_worldmodel import keys
 
 pytest.importorskip("cv2")
@@ -75,13 +76,8 @@ def make(env_id: str, size=(64, 64)):
 
 def rollout(env, env_id: str, seed: int = 0, options=None):
     """Frames (T+1, H, W, 3) and states (T+1, D) of the case's action sequence."""
-    obs, _ = env.reset(seed=seed, options=options)
-    frames, states = [env.render()], [obs[keys.STATE]]
-    for a in CASES[env_id]["actions"]:
-        obs, *_ = env.step(np.asarray(a, np.float32))
-        frames.append(env.render())
-        states.append(obs[keys.STATE])
-    return np.stack(frames), np.stack(states)
+    actions = [np.asarray(a, np.float32) for a in CASES[env_id]["actions"]]
+    return run_actions(env, seed, actions, options)[:2]
 
 
 @pytest.mark.parametrize("env_id", CASES)

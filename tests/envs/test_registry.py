@@ -11,6 +11,7 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 import stable_worldmodel as swm
+from env_checks import run_actions
 from stable_worldmodel import keys
 from stable_worldmodel.envs import get_entry, list_envs, register_env
 from stable_worldmodel.envs.base import SupportsDatasetReset, SupportsEvalState, SupportsRenderSize
@@ -58,19 +59,17 @@ def test_env_smoke(env_id):
     assert isinstance(env, SupportsRenderSize) and isinstance(env, SupportsEvalState)
     assert isinstance(env, SupportsDatasetReset)
     assert len(env.variation_space.names()) >= 5
+    _, info = env.reset(seed=0)
+    assert set(info) >= {keys.GOAL, keys.GOAL_STATE, keys.GOAL_PROPRIO}
 
     def rollout():
         e = gym.make(env_id, disable_env_checker=True)
         e.unwrapped.set_render_size((32, 32))
-        obs, info = e.reset(seed=3, options={"variation": ["all"]})
         e.action_space.seed(0)
-        states, frames = [obs[keys.STATE]], [e.render()]
-        for _ in range(5):
-            obs, *_ = e.step(e.action_space.sample())
-            states.append(obs[keys.STATE])
-            frames.append(e.render())
-        assert set(info) >= {keys.GOAL, keys.GOAL_STATE, keys.GOAL_PROPRIO}
-        return np.stack(states), np.stack(frames)
+        actions = [e.action_space.sample() for _ in range(5)]
+        frames, states, goal = run_actions(e, 3, actions, options={"variation": ["all"]})
+        assert goal.shape == (32, 32, 3)
+        return states, frames
 
     (s1, f1), (s2, f2) = rollout(), rollout()
     np.testing.assert_array_equal(s1, s2)

@@ -13,6 +13,7 @@ from env_checks import (
     assert_factor_changes_episode,
     assert_render_size,
     count_draws,
+    run_actions,
 )
 from stable_worldmodel import keys
 from stable_worldmodel.envs.voidrun.env import DOWN, LEFT, RIGHT, UP, VoidRunEnv, shortest_path_lengths
@@ -36,13 +37,7 @@ def open_floor(agent=(0, 0), goal=(N - 1, N - 1), holes=()) -> np.ndarray:
 
 
 def rollout(env, seed, options=None, actions=(RIGHT, DOWN, RIGHT, DOWN, RIGHT, DOWN)):
-    obs, info = env.reset(seed=seed, options=options)
-    frames, states = [env.render()], [obs[keys.STATE]]
-    for a in actions:
-        obs, *_ = env.step(a)
-        frames.append(env.render())
-        states.append(obs[keys.STATE])
-    return np.stack(frames), np.stack(states), info[keys.GOAL]
+    return run_actions(env, seed, actions, options)
 
 
 def test_check_env_passes():
