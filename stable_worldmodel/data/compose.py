@@ -13,7 +13,8 @@ from .dataset import Dataset, to_tensors
 
 
 class _CompositeDataset(Dataset):
-    """A dataset built from others: keeps them in ``datasets`` (at least one)."""
+    """A dataset built from others: keeps them in ``datasets`` (at least one) and lets
+    :meth:`_combine` set up the columns, then checks ``keys_to_load``."""
 
     def __init__(
         self,
@@ -27,6 +28,12 @@ class _CompositeDataset(Dataset):
         self.datasets = list(datasets)
         if not self.datasets:
             raise ConfigError(f"{type(self).__name__} requires at least one dataset, got none")
+        self._combine()
+        if keys_to_load is not None:
+            self.check_keys(keys_to_load)
+
+    def _combine(self) -> None:
+        raise NotImplementedError("_combine() -> None: set up the columns of self.datasets")
 
 
 class MergeDataset(_CompositeDataset):
@@ -35,15 +42,7 @@ class MergeDataset(_CompositeDataset):
     A column present in several datasets is taken from the first one that has it.
     """
 
-    def __init__(
-        self,
-        datasets: Sequence[Dataset],
-        frameskip: int = 1,
-        num_steps: int = 1,
-        transform: Callable[[dict], dict] | None = None,
-        keys_to_load: Sequence[str] | None = None,
-    ):
-        super().__init__(datasets, frameskip, num_steps, transform, keys_to_load)
+    def _combine(self) -> None:
         ref = np.asarray(self.datasets[0].lengths)
         for i, ds in enumerate(self.datasets[1:], start=1):
             if not np.array_equal(np.asarray(ds.lengths), ref):
@@ -55,8 +54,6 @@ class MergeDataset(_CompositeDataset):
         for ds in self.datasets:
             for col in ds.column_names:
                 self._owner.setdefault(col, ds)
-        if keys_to_load is not None:
-            self.check_keys(keys_to_load)
 
     @property
     def column_names(self) -> list[str]:
@@ -79,22 +76,12 @@ class MergeDataset(_CompositeDataset):
 class ConcatDataset(_CompositeDataset):
     """Episodes of several datasets one after the other (columns: those common to all)."""
 
-    def __init__(
-        self,
-        datasets: Sequence[Dataset],
-        frameskip: int = 1,
-        num_steps: int = 1,
-        transform: Callable[[dict], dict] | None = None,
-        keys_to_load: Sequence[str] | None = None,
-    ):
-        super().__init__(datasets, frameskip, num_steps, transform, keys_to_load)
+    def _combine(self) -> None:
         common = [c for c in self.datasets[0].column_names if all(c in d.column_names for d in self.datasets[1:])]
         self._columns = common
         self._lengths = np.concatenate([np.asarray(d.lengths, np.int64) for d in self.datasets])
         self._offsets = np.concatenate([[0], np.cumsum(self._lengths)[:-1]]).astype(np.int64)
         self._first_ep = np.cumsum([0] + [d.num_episodes for d in self.datasets])
-        if keys_to_load is not None:
-            self.check_keys(keys_to_load)
 
     def _read(self, col: str, start: int, stop: int) -> np.ndarray:
         ep = int(np.searchsorted(self._offsets, start, side="right") - 1)
