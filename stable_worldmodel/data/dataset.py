@@ -27,6 +27,7 @@ import numpy as np
 
 from .. import keys
 from ..errors import ConfigError, unknown_name
+from ._ipc import prepare_worker
 
 logger = logging.getLogger(__name__)
 
@@ -133,16 +134,21 @@ class Dataset(_TorchDataset):
 
     def locate(self, idx: int) -> tuple[int, int]:
         """``(episode, step)`` of the first row of sample ``idx``."""
-        cum, _ = self._sample_index()
-        n = int(cum[-1])
         if isinstance(idx, bool) or not isinstance(idx, (int, np.integer)):
             raise TypeError(f"{type(self).__name__} indices must be ints, got {type(idx).__name__}")
-        if idx < 0:
-            idx += n
-        if not 0 <= idx < n:
-            raise IndexError(f"{type(self).__name__} index {idx} out of range for {n} samples")
-        ep = int(np.searchsorted(cum, idx, side="right") - 1)
-        return ep, int(idx - cum[ep])
+        eps, steps = self._locate_many(np.asarray([idx], np.int64))
+        return int(eps[0]), int(steps[0])
+
+    def _locate_many(self, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Episodes and steps of the samples ``idx`` (int array, negatives count from the end)."""
+        cum, _ = self._sample_index()
+        n = int(cum[-1])
+        idx = np.where(idx < 0, idx + n, idx)
+        bad = (idx < 0) | (idx >= n)
+        if bad.any():
+            raise IndexError(f"{type(self).__name__} index {int(idx[bad][0])} out of range for {n} samples")
+        eps = np.searchsorted(cum, idx, side="right") - 1
+        return eps, idx - cum[eps]
 
     def sample_rows(self, idx: int) -> int:
         """Global row of the first row of sample ``idx``."""
@@ -150,17 +156,53 @@ class Dataset(_TorchDataset):
         return int(self._sample_index()[1][ep]) + step
 
     # -- items --------------------------------------------------------------------------------
-    def _window(self, col: str, rows: np.ndarray) -> np.ndarray:
-        """Rows ``(span, ...)`` of one window -> ``(T, ...)`` frames (or grouped actions)."""
-        if col == keys.ACTION:
-            return rows.reshape(self.num_steps, -1)
-        return rows[:: self.frameskip]
+    def _row_offsets(self, col: str) -> np.ndarray:
+        """Rows of a window that ``col`` keeps: the whole span for ``action``, every
+        ``frameskip``-th row from the first otherwise."""
+        step = 1 if col == keys.ACTION else self.frameskip
+        return np.arange(0, self.span, step)
+
+    def _read_windows(self, col: str, starts: np.ndarray) -> np.ndarray:
+        """Kept rows ``(B, len(_row_offsets(col)), ...)`` of ``col`` for windows starting at the
+        global rows ``starts``; kinds that can gather many windows at once override it."""
+        span = self.span
+        keep = slice(None, None, 1 if col == keys.ACTION else self.frameskip)
+        return np.stack([self._read(col, int(s), int(s) + span)[keep] for s in starts])
+
+    def _batch(self, indices: Sequence[int]) -> dict[str, Any]:
+        """Columns of the samples ``indices`` as ``(B, T, ...)`` tensors (images ``(B, T, C, H, W)``)."""
+        idx = np.asarray(indices)
+        if idx.ndim != 1 or not idx.size or not np.issubdtype(idx.dtype, np.integer):
+            raise TypeError(f"{type(self).__name__} indices must be ints, got {indices!r}")
+        eps, steps = self._locate_many(idx.astype(np.int64))
+        starts = self._sample_index()[1][eps] + steps
+        cols = {col: self._read_windows(col, starts) for col in self.keys_to_load}
+        if keys.ACTION in cols:  # (B, span, A) -> (B, T, frameskip * A)
+            cols[keys.ACTION] = cols[keys.ACTION].reshape(len(starts), self.num_steps, -1)
+        return to_tensors(cols, batch=True)
 
     def __getitem__(self, idx: int) -> dict[str, Any]:
-        start = self.sample_rows(idx)
-        item = {col: self._window(col, self._read(col, start, start + self.span)) for col in self.keys_to_load}
-        item = to_tensors(item)
+        prepare_worker()
+        if isinstance(idx, bool) or not isinstance(idx, (int, np.integer)):
+            raise TypeError(f"{type(self).__name__} indices must be ints, got {type(idx).__name__}")
+        item = {k: v[0] for k, v in self._batch([idx]).items()}
         return self.transform(item) if self.transform is not None else item
+
+    def __getitems__(self, indices: Sequence[int]) -> list[dict[str, Any]]:
+        """``[self[i] for i in indices]``, read column by column (what a DataLoader calls per batch).
+
+        Kinds that override ``__getitem__`` get exactly their per-item path.
+        """
+        prepare_worker()
+        if type(self).__getitem__ is not Dataset.__getitem__:
+            return [self[i] for i in indices]
+        if len(indices) == 0:
+            return []
+        batch = self._batch(indices)
+        items = [dict(zip(batch, views)) for views in zip(*(v.unbind(0) for v in batch.values()))]
+        if self.transform is not None:
+            items = [self.transform(item) for item in items]
+        return items
 
     def load_episode(self, ep: int) -> dict[str, Any]:
         """Every loaded column of episode ``ep`` as tensors ``(L, ...)`` (images ``(L, C, H, W)``)."""
@@ -213,14 +255,15 @@ class Dataset(_TorchDataset):
         )
 
 
-def to_tensors(item: dict[str, np.ndarray]) -> dict[str, Any]:
-    """numpy columns -> torch tensors; images ``(T, H, W, C)`` -> ``(T, C, H, W)``."""
+def to_tensors(item: dict[str, np.ndarray], batch: bool = False) -> dict[str, Any]:
+    """numpy columns -> torch tensors; images ``(T, H, W, C)`` -> ``(T, C, H, W)`` (with a
+    leading batch axis when ``batch``)."""
     import torch
 
     out = {}
     for k, v in item.items():
         arr = np.asarray(v)
-        if image_like(arr):
-            arr = arr.transpose(0, 3, 1, 2)
+        if image_like(arr[0] if batch else arr):
+            arr = np.moveaxis(arr, -1, -3)
         out[k] = torch.from_numpy(np.ascontiguousarray(arr))
     return out

@@ -22,13 +22,14 @@ import numpy as np
 from .. import keys
 from ..errors import DatasetFormatError
 from . import _superblock
-from .dataset import Dataset
+from .dataset import Dataset, image_like
 from .utils import resolve_dataset_path
 
 logger = logging.getLogger(__name__)
 
 BLOCK_BYTES = 1 << 20  # decoded bytes per cached block of a small-row column
 CACHE_BYTES = 64 << 20  # decoded bytes kept per column and process
+PRELOAD_BYTES = 256 << 20  # datasets whose loaded columns decode to at most this are read at construction
 
 
 def open_h5(path: str | os.PathLike):
@@ -66,6 +67,11 @@ class HDF5Dataset(Dataset):
         keys_to_load: columns in items (default: every column).
         keys_to_cache: columns loaded into memory at construction (fast for small columns).
         cache_dir: directory holding ``<name>.h5``.
+        preload: read every loaded column into memory at construction. The default (None) does
+            it when they decode to at most ``PRELOAD_BYTES`` (256 MiB): batches are then gathered
+            with one numpy indexing per column, and DataLoader workers forked afterwards share
+            the decoded arrays instead of each decompressing the file again, epoch after epoch.
+            Larger datasets are read on demand through a per-process cache of decoded blocks.
 
     Items: ``{col: tensor (T, ...)}``; images ``(T, C, H, W)`` uint8; ``action`` ``(T, frameskip * A)``.
     """
@@ -79,6 +85,8 @@ class HDF5Dataset(Dataset):
         keys_to_load: Sequence[str] | None = None,
         keys_to_cache: Sequence[str] | None = None,
         cache_dir: str | os.PathLike | None = None,
+        *,
+        preload: bool | None = None,
     ):
         super().__init__(frameskip=frameskip, num_steps=num_steps, transform=transform, keys_to_load=keys_to_load)
         self.path = resolve_dataset_path(name, cache_dir)
@@ -103,6 +111,7 @@ class HDF5Dataset(Dataset):
 
         self._columns = [k for k, v in f.items() if isinstance(v, h5py.Dataset) and k not in (keys.EP_LEN, keys.EP_OFFSET)]
         self._shapes = {k: (tuple(f[k].shape[1:]), f[k].dtype) for k in self._columns}
+        self._images = {k for k, (shape, dtype) in self._shapes.items() if image_like(np.empty((0, *shape), dtype))}
         self._block_rows = {k: self._choose_block(f[k]) for k in self._columns}
         self._max_blocks = {
             k: max(8, CACHE_BYTES // max(self._block_rows[k] * f[k].dtype.itemsize * int(np.prod(f[k].shape[1:])), 1))
@@ -111,10 +120,18 @@ class HDF5Dataset(Dataset):
         if keys_to_load is not None:
             self.check_keys(keys_to_load)
         self._cache: dict[str, np.ndarray] = {}
-        if keys_to_cache:
-            end = int(self._offsets[-1] + self._lengths[-1]) if len(self._lengths) else 0
-            for col in self.check_keys(list(keys_to_cache)):
-                self._cache[col] = f[col][:end]
+        end = self.num_rows
+        to_cache = self.check_keys(list(keys_to_cache or []))
+        if preload is None:
+            decoded = sum(end * self._shapes[c][1].itemsize * int(np.prod(self._shapes[c][0])) for c in self.keys_to_load)
+            preload = decoded <= PRELOAD_BYTES
+        if preload:
+            to_cache += [c for c in self.keys_to_load if c not in to_cache]
+        for col in to_cache:
+            rows = f[col][:end]
+            # images are kept (N, C, H, W) so that items need no transposing copy; _read
+            # hands out (N, H, W, C) views of them like every other reader
+            self._cache[col] = np.ascontiguousarray(np.moveaxis(rows, -1, -3)) if image_like(rows) else rows
 
     # -- file handle --------------------------------------------------------------------------
     def _handle(self):
@@ -153,8 +170,15 @@ class HDF5Dataset(Dataset):
         self.check_keys([col])
         return self._shapes[col]
 
-    def _read(self, col: str, start: int, stop: int) -> np.ndarray:
+    def _cached(self, col: str) -> np.ndarray | None:
+        """The in-memory rows of ``col`` as ``(N, ...)`` (images as ``(N, H, W, C)`` views), or None."""
         cached = self._cache.get(col)
+        if cached is not None and col in self._images:
+            return np.moveaxis(cached, -3, -1)
+        return cached
+
+    def _read(self, col: str, start: int, stop: int) -> np.ndarray:
+        cached = self._cached(col)
         if cached is not None:
             return cached[start:stop]
         size = self._block_rows[col]
@@ -180,11 +204,17 @@ class HDF5Dataset(Dataset):
             lru.move_to_end(b)
         return block
 
+    def _read_windows(self, col: str, starts: np.ndarray) -> np.ndarray:
+        cached = self._cached(col)
+        if cached is None:
+            return super()._read_windows(col, starts)
+        return cached[starts[:, None] + self._row_offsets(col)]  # one gather for the whole batch
+
     def get_col_data(self, col: str) -> np.ndarray:
         self.check_keys([col])
         end = self.num_rows and int(self._offsets[-1] + self._lengths[-1])
         if col in self._cache:
-            return self._cache[col][:end]
+            return self._cached(col)[:end]
         return self._handle()[col][:end]
 
     def __repr__(self) -> str:

@@ -22,9 +22,10 @@ def expected_window(synth, ep, start, num_steps, frameskip):
     return out
 
 
+@pytest.mark.parametrize("preload", [True, False])
 @pytest.mark.parametrize("num_steps, frameskip", [(1, 1), (2, 1), (3, 1), (2, 2), (1, 3)])
-def test_every_window_matches_the_written_rows(make_h5, synth, num_steps, frameskip):
-    ds = HDF5Dataset(make_h5(LENGTHS), num_steps=num_steps, frameskip=frameskip)
+def test_every_window_matches_the_written_rows(make_h5, synth, num_steps, frameskip, preload):
+    ds = HDF5Dataset(make_h5(LENGTHS), num_steps=num_steps, frameskip=frameskip, preload=preload)
     span = num_steps * frameskip
     starts = [(e, s) for e, n in enumerate(LENGTHS) for s in range(n - span + 1)]
     assert len(ds) == len(starts)
@@ -91,3 +92,57 @@ def test_dataloader_with_workers(make_h5):
     states = torch.cat([b[keys.STATE] for b in batches])
     assert states.shape == (len(ds), 2, 2)
     np.testing.assert_array_equal(states.numpy(), np.stack([ds[i][keys.STATE].numpy() for i in range(len(ds))]))
+
+
+@pytest.mark.parametrize("preload", [True, False])
+@pytest.mark.parametrize("num_steps, frameskip", [(1, 1), (2, 2), (3, 1)])
+def test_getitems_is_the_list_of_items(make_h5, num_steps, frameskip, preload):
+    ds = HDF5Dataset(make_h5(LENGTHS), num_steps=num_steps, frameskip=frameskip, preload=preload,
+                     transform=lambda item: {**item, "twice": item[keys.STATE] * 2})
+    idx = [len(ds) - 1, 0, 3, -1, 2, 2]
+    batch = ds.__getitems__(idx)
+    assert len(batch) == len(idx)
+    for got, i in zip(batch, idx):
+        want = ds[i]
+        assert set(got) == set(want)
+        for k in want:
+            assert got[k].dtype == want[k].dtype and got[k].shape == want[k].shape
+            torch.testing.assert_close(got[k], want[k], rtol=0, atol=0, equal_nan=True)
+    assert ds.__getitems__([]) == []
+    with pytest.raises(IndexError, match=str(len(ds))):
+        ds.__getitems__([0, len(ds)])
+    with pytest.raises(TypeError, match="ints"):
+        ds.__getitems__([0.5])
+    with pytest.raises(TypeError, match="ints"):
+        ds[1.0]
+
+
+def test_preload_defaults_to_small_datasets(make_h5, monkeypatch, synth):
+    from stable_worldmodel.data import hdf5
+
+    path = make_h5(LENGTHS)
+    small = HDF5Dataset(path, keys_to_load=[keys.PIXELS, keys.STATE])
+    assert set(small._cache) == {keys.PIXELS, keys.STATE}  # only the loaded columns
+    monkeypatch.setattr(hdf5, "PRELOAD_BYTES", 10)
+    assert HDF5Dataset(path)._cache == {}
+    assert set(HDF5Dataset(path, preload=True)._cache) == set(small.column_names)
+    lazy = HDF5Dataset(path, preload=False, keys_to_cache=[keys.PIXELS])
+    assert set(lazy._cache) == {keys.PIXELS}
+    # images kept in memory still read back as (N, H, W, C) rows everywhere
+    want = np.concatenate([synth(e, n)[keys.PIXELS] for e, n in enumerate(LENGTHS)])
+    for ds in (small, lazy, HDF5Dataset(path, preload=False)):
+        np.testing.assert_array_equal(ds.get_col_data(keys.PIXELS), want)
+        np.testing.assert_array_equal(ds.get_row_data(6)[keys.PIXELS], want[6])
+        np.testing.assert_array_equal(ds.load_episode(1)[keys.PIXELS].numpy(), want[5:12].transpose(0, 3, 1, 2))
+        assert ds[0][keys.PIXELS].is_contiguous()
+
+
+def test_dataloader_batches_equal_direct_reads(make_h5):
+    ds = HDF5Dataset(make_h5((30, 40)), num_steps=3, frameskip=2)
+    loader = torch.utils.data.DataLoader(ds, batch_size=8, num_workers=2, shuffle=False)
+    batches = list(loader)
+    for k in ds.column_names:
+        got = torch.cat([b[k] for b in batches])
+        want = torch.stack([ds[i][k] for i in range(len(ds))])
+        torch.testing.assert_close(got, want, rtol=0, atol=0, equal_nan=True)
+    got.add_(1) if got.dtype != torch.bool else got.logical_not_()  # writable, no warning
