@@ -9,21 +9,44 @@ Layout (N = total rows over all episodes, E = episodes)::
     ep_offset   (E,)  int64     first row of each episode
     attrs       next_seed       seed of the next episode to record (resuming continues from it)
 
-Crash safety: rows are appended (resizable chunked datasets) and flushed *before* ``ep_len``
-/ ``ep_offset`` grow, so those two columns are the commit record; readers trust only them
-and ignore rows past the last committed episode. The file is written in SWMR mode
-(``libver='latest'``) so HDF5 orders its metadata writes and SWMR readers may open it
-while it is written; after every commit the superblock is sealed (see ``_superblock``) so
-a plain ``h5py.File(path)`` also opens it, including after a ``kill -9`` between two
-commits. A kill *during* a commit leaves every earlier episode intact; such a file opens
-with ``h5py.File(path, swmr=True)`` and :func:`~._superblock.repair` (run by this writer
-and by :class:`~.hdf5.HDF5Dataset`) makes it plain-openable again.
+Commit record: rows are appended (resizable chunked datasets) and flushed *before*
+``ep_len`` / ``ep_offset`` grow; readers trust only those two columns and ignore rows past
+the last committed episode (a resuming writer drops them).
+
+Crash safety. A ``kill -9`` (or power-preserving crash of the process) at any moment leaves
+a file that plain ``h5py.File(path)`` opens, with default arguments and no repair step, and
+in which every episode whose :meth:`HDF5Writer.write_episodes` returned reads back exactly;
+the episodes of the call under way are committed entirely or not at all. How:
+
+* HDF5 writes in SWMR mode (``libver='latest'``), which orders its metadata writes so that
+  nothing on disk points at data not yet written;
+* it writes through :class:`~._superblock.SealedFile` (h5py's file-object driver), which puts
+  each write straight into the page cache and keeps the superblock free of "open for write"
+  flags and its end-of-file address equal to the file's size, so the file is valid between
+  any two system calls. A killed writer leaves up to ``SLACK`` (1 MiB) of unused space at the
+  end, which a resuming writer does not reclaim; :meth:`HDF5Writer.close` (or interpreter
+  exit) trims it;
+* a new file is written as ``.<name>.partial`` and renamed once valid, so ``path`` never
+  holds a half-created file.
+
+Not covered: the operating system crashing or losing power (nothing is fsync'ed).
+
+Readers may open the file while it is written and see the episodes committed when they
+opened it. A plain reader assumes the file does not change under it: it works while the
+writer appends less than ``SLACK`` bytes during its reads (otherwise HDF5 reports ``addr
+overflow``; open it again). SWMR readers (``h5py.File(path, 'r', libver='latest',
+swmr=True)``) have no such limit.
+
+Failures: an I/O error inside HDF5's writes (``ENOSPC``...) raises :class:`DatasetFormatError`
+and a ``KeyboardInterrupt`` raised there propagates; in both cases nothing more is written, the
+file is as a kill at that moment would leave it, and the writer is closed.
 """
 
 from __future__ import annotations
 
 import logging
 import os
+import weakref
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -62,6 +85,16 @@ def _chunk_rows(row_shape: tuple[int, ...], dtype: np.dtype, image: bool) -> int
     return min(rows, 64) if image else min(max(rows, 256), 65536)
 
 
+def _close(f, fileobj: _superblock.SealedFile) -> None:
+    """HDF5 writes through ``fileobj`` while it closes, so the descriptor goes last."""
+    if os.getpid() != fileobj.pid:  # a forked child exiting: the writer and its file are the parent's
+        fileobj.detach()
+    try:
+        f.close()
+    finally:
+        fileobj.close()
+
+
 class HDF5Writer:
     """Append whole episodes to ``path`` (created on the first episode, resumed if it exists).
 
@@ -76,6 +109,9 @@ class HDF5Writer:
         self.path = Path(path)
         self._h5py = h5py
         self._file = None
+        self._io: _superblock.SealedFile | None = None
+        self._closer: weakref.finalize | None = None
+        self._closed = False
         self._schema: dict[str, tuple[tuple[int, ...], np.dtype]] = {}
         self.num_rows = 0
         self.num_episodes = 0
@@ -88,12 +124,12 @@ class HDF5Writer:
         if _superblock.repair(self.path):
             logger.warning("%s was left open by a killed writer; cleared its write flags", self.path)
         try:
-            f = self._h5py.File(self.path, "a", libver="latest", locking=False)
+            f = self._open(_superblock.SealedFile(self.path), "r+")
         except OSError as exc:
             raise DatasetFormatError(f"HDF5Writer requires a readable HDF5 file, got {self.path}: {exc}") from exc
         missing = [k for k in INDEX_COLUMNS if k not in f]
         if missing:
-            f.close()
+            self.close()
             raise DatasetFormatError(f"HDF5Writer requires columns {missing} to append to {self.path}, got {sorted(f)}")
         lengths = f[keys.EP_LEN][:].astype(np.int64)
         self.num_episodes = len(lengths)
@@ -110,12 +146,13 @@ class HDF5Writer:
         self.next_seed = None if seed is None or int(seed) < 0 else int(seed)
         if NEXT_SEED_ATTR not in f.attrs:
             f.attrs[NEXT_SEED_ATTR] = np.int64(-1)
-        self._file = f
         self._start_swmr()
+        self._raise_io_error("resume")
 
     def _create(self, episode: Mapping[str, np.ndarray]) -> None:
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        f = self._h5py.File(self.path, "w", libver="latest", locking=False)
+        partial = self.path.with_name(f".{self.path.name}.partial")  # renamed once it is a valid file
+        f = self._open(_superblock.SealedFile(partial, create=True, name=self.path), "w")
         try:
             for name, value in episode.items():
                 arr = np.asarray(value)
@@ -135,17 +172,46 @@ class HDF5Writer:
             f.create_dataset(keys.EP_LEN, shape=(0,), maxshape=(None,), dtype=np.int32, chunks=(4096,))
             f.create_dataset(keys.EP_OFFSET, shape=(0,), maxshape=(None,), dtype=np.int64, chunks=(4096,))
             f.attrs[NEXT_SEED_ATTR] = np.int64(-1)
-        except Exception:
-            f.close()
-            self.path.unlink(missing_ok=True)
+            self._start_swmr()
+            self._raise_io_error("create")
+        except BaseException:
+            self._release()
+            self._schema = {}
+            partial.unlink(missing_ok=True)
             raise
-        self._file = f
-        self._start_swmr()
+        os.replace(partial, self.path)
+
+    def _open(self, fileobj: _superblock.SealedFile, mode: str):
+        """Open HDF5 on ``fileobj``; closed (HDF5 first, then the descriptor) by :meth:`close` or at exit."""
+        try:
+            f = self._h5py.File(fileobj, mode, libver="latest")
+        except BaseException:
+            fileobj.close()
+            raise
+        self._file, self._io = f, fileobj
+        self._closer = weakref.finalize(self, _close, f, fileobj)
+        return f
+
+    def _raise_io_error(self, doing: str) -> None:
+        """Raise the failure the file object kept during HDF5's last calls, if any; closes the writer.
+
+        Nothing was written after it, so the file is as a kill at that moment would leave it.
+        """
+        exc = self._io.error if self._io is not None else None
+        if exc is None:
+            return
+        self._io = None  # reported here, not again by close()
+        self.close()
+        if not isinstance(exc, Exception):  # KeyboardInterrupt, SystemExit
+            raise exc
+        raise DatasetFormatError(
+            f"HDF5Writer could not {doing} {self.path}: {exc}; the {self.num_episodes} episodes committed before "
+            f"are intact, open a new HDF5Writer to append after them"
+        ) from exc
 
     def _start_swmr(self) -> None:
         self._file.swmr_mode = True
         self._file.flush()
-        _superblock.seal(self.path)
 
     # -- writing ------------------------------------------------------------------------------
     def _check(self, episode: Mapping[str, np.ndarray]) -> int:
@@ -180,6 +246,10 @@ class HDF5Writer:
 
     def write_episodes(self, episodes: Sequence[Mapping[str, np.ndarray]], next_seed: int | None = None) -> None:
         """Append ``episodes`` and commit them (one flush); ``next_seed`` is stored for resuming."""
+        if self._closed:
+            raise DatasetFormatError(
+                f"HDF5Writer requires an open writer, got a closed one for {self.path}; open a new HDF5Writer to append"
+            )
         if not episodes:
             return
         if self._file is None:
@@ -196,10 +266,12 @@ class HDF5Writer:
                 dset[start:] = data
                 dset.flush()
             except (OSError, TypeError, ValueError) as exc:
+                self._raise_io_error(f"write column {name!r} to")
                 raise DatasetFormatError(
                     f"HDF5Writer could not write column {name!r} of {self.path} ({total} rows); "
                     f"the {self.num_episodes} episodes committed before are intact: {exc}"
                 ) from exc
+            self._raise_io_error(f"write column {name!r} to")
         offsets = start + np.concatenate([[0], np.cumsum(lengths)[:-1]])
         try:
             for name, values in ((keys.EP_OFFSET, offsets), (keys.EP_LEN, lengths)):  # ep_len last: the commit
@@ -212,15 +284,30 @@ class HDF5Writer:
                 self.next_seed = int(next_seed)
             f.flush()
         except OSError as exc:
+            self._raise_io_error("commit episodes to")
             raise DatasetFormatError(f"HDF5Writer could not commit episodes to {self.path}: {exc}") from exc
-        _superblock.seal(self.path)
+        self._raise_io_error("commit episodes to")
         self.num_rows += total
         self.num_episodes += len(lengths)
 
     def close(self) -> None:
-        if self._file is not None:
-            self._file.close()
-            self._file = None
+        """Close the file (every committed episode was already flushed); idempotent."""
+        self._closed = True
+        self._release()
+
+    def _release(self) -> None:
+        io, closer = self._io, self._closer
+        self._file = self._io = self._closer = None
+        if closer is None:
+            return
+        try:
+            closer()
+        except Exception as exc:  # noqa: BLE001 - every commit is on disk already
+            logger.warning("%s: closing failed (%s); the committed episodes are intact", self.path, exc)
+        if io is not None and io.error is not None:
+            if not isinstance(io.error, Exception):  # Ctrl-C while HDF5 closed the file
+                raise io.error
+            logger.warning("%s: closing failed (%s); the committed episodes are intact", self.path, io.error)
 
     def __enter__(self) -> HDF5Writer:
         return self
@@ -228,8 +315,3 @@ class HDF5Writer:
     def __exit__(self, *exc: Any) -> None:
         self.close()
 
-    def __del__(self) -> None:  # pragma: no cover - best effort
-        try:
-            self.close()
-        except Exception:  # noqa: BLE001
-            pass

@@ -1,17 +1,59 @@
-"""HDF5Writer: layout, validation, resume, loud failures, superblock sealing."""
+"""HDF5Writer: layout, validation, resume, loud failures, and a file that survives ``kill -9``."""
 
 from __future__ import annotations
+
+import multiprocessing
+import os
+import random
+import signal
+import subprocess
+import sys
+import textwrap
+import time
 
 import h5py
 import numpy as np
 import pytest
 
 from stable_worldmodel import keys
-from stable_worldmodel.data import _superblock
+from stable_worldmodel.data import HDF5Dataset, _superblock
 from stable_worldmodel.data.writer import NEXT_SEED_ATTR, HDF5Writer
 from stable_worldmodel.errors import DatasetFormatError
 
 
+def _length(ep: int) -> int:
+    return 2 + ep % 5
+
+
+def _record_forever(path, synth, pause=0.0):  # pragma: no cover - runs in a forked child
+    """Append episodes 0, 1, ... (content derived from the index) until killed."""
+    try:
+        writer = HDF5Writer(path)
+        ep = writer.num_episodes
+        while True:
+            writer.write_episodes([synth(ep, _length(ep))], next_seed=ep + 1)
+            ep += 1
+            time.sleep(pause)
+    finally:
+        os._exit(1)
+
+
+def _check_committed(f, synth) -> int:
+    """Every committed episode of ``f`` (by ep_len / ep_offset) holds what was written; their count."""
+    lengths, offsets = f[keys.EP_LEN][:], f[keys.EP_OFFSET][: len(f[keys.EP_LEN])]
+    assert lengths.tolist() == [_length(e) for e in range(len(lengths))]
+    end = int(offsets[-1] + lengths[-1]) if len(lengths) else 0
+    columns = {name: f[name][:end] for name in synth(0, 1)}
+    for ep, (off, n) in enumerate(zip(offsets, lengths)):
+        for name, value in synth(ep, int(n)).items():
+            np.testing.assert_array_equal(columns[name][off : off + n], value, err_msg=f"{name} of episode {ep}")
+    return len(lengths)
+
+
+def _fork(target, *args):
+    proc = multiprocessing.get_context("fork").Process(target=target, args=args, daemon=True)
+    proc.start()
+    return proc
 
 
 def test_layout(make_h5):
@@ -97,17 +139,173 @@ def test_lookup3_matches_hdf5_superblock_checksum(make_h5):
 def test_file_is_plain_openable_while_the_writer_is_open(tmp_path, synth):
     path = tmp_path / "open.h5"
     w = HDF5Writer(path)
-    w.write_episodes([synth(0, 3)])
+    w.write_episodes([synth(0, 2)])
     assert not _superblock.needs_repair(path)
-    with h5py.File(path, "r", locking=False) as f:  # a plain reader while the writer holds it
-        assert f[keys.EP_LEN][:].tolist() == [3]
-    w.write_episodes([synth(1, 2)])
+    with h5py.File(path) as f:  # plain h5py, default arguments, while the writer holds the file
+        assert _check_committed(f, synth) == 1
+    ds = HDF5Dataset(path)
+    assert ds.lengths.tolist() == [2]
+    ds.close()
+    w.write_episodes([synth(1, 3)])
+    with h5py.File(path) as f:
+        assert _check_committed(f, synth) == 2
     w.close()
-    with h5py.File(path, "r") as f:
-        assert f[keys.EP_LEN][:].tolist() == [3, 2]
+    with h5py.File(path) as f:
+        assert _check_committed(f, synth) == 2
 
 
-def test_repair_clears_flags_left_by_a_killed_writer(make_h5):
+def test_every_state_between_two_system_calls_opens_plainly(tmp_path, monkeypatch, synth):
+    """What a ``kill -9`` can leave: the file after each write/truncate the writer makes."""
+    path = tmp_path / "steps.h5"
+    states = []  # (file bytes, episodes committed when the call returned, path existed)
+
+    class Recording(_superblock.SealedFile):
+        def _pwrite(self, view, pos):
+            super()._pwrite(view, pos)
+            states.append((os.pread(self._fd, 1 << 30, 0), committed[0], path.exists()))
+
+        def _ftruncate(self, size):
+            super()._ftruncate(size)
+            states.append((os.pread(self._fd, 1 << 30, 0), committed[0], path.exists()))
+
+    monkeypatch.setattr(_superblock, "SealedFile", Recording)
+    committed = [0]
+    for session in ((0, 1, 2), (3,)):  # create, then resume
+        with HDF5Writer(path) as w:
+            for ep in session:
+                w.write_episodes([synth(ep, _length(ep))], next_seed=ep + 1)
+                committed[0] += 1
+    assert len(states) > 50
+    copy = tmp_path / "state.h5"
+    for i, (raw, done, existed) in enumerate(states):
+        if not existed:  # a new file is written under another name until it is valid
+            assert done == 0
+            continue
+        copy.write_bytes(raw)
+        with h5py.File(copy) as f:
+            assert _check_committed(f, synth) >= done, f"state {i}"
+
+
+def test_sigkill_at_random_moments_keeps_every_committed_episode(tmp_path, synth):
+    path = tmp_path / "killed.h5"
+    rng = random.Random(0)
+    seen = 0
+    for _ in range(15):
+        proc = _fork(_record_forever, path, synth)
+        time.sleep(rng.uniform(0.0, 0.1))
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.join()
+        assert proc.exitcode == -signal.SIGKILL
+        if not path.exists():  # killed before the file was first valid
+            assert seen == 0
+            continue
+        assert not _superblock.needs_repair(path)
+        with h5py.File(path) as f:  # plain h5py, default arguments, no repair
+            count = _check_committed(f, synth)
+        assert count >= seen  # the next child resumed after the last committed episode
+        seen = count
+    assert seen > 10
+
+
+def test_readers_see_only_committed_episodes_while_recording(tmp_path, synth):
+    path = tmp_path / "live.h5"
+    proc = _fork(_record_forever, path, synth, 0.002)
+    try:
+        deadline = time.time() + 10
+        while not path.exists() and time.time() < deadline:
+            time.sleep(0.005)
+        counts = []
+        stop = time.time() + 0.5
+        while time.time() < stop or len(counts) < 5:
+            with h5py.File(path) as f:  # plain h5py while a commit may be under way
+                counts.append(_check_committed(f, synth))
+            ds = HDF5Dataset(path)
+            n = ds.num_episodes
+            assert ds.lengths.tolist() == [_length(e) for e in range(n)]
+            expected = [synth(e, _length(e))[keys.STATE] for e in range(n)]
+            np.testing.assert_array_equal(ds.get_col_data(keys.STATE), np.concatenate([np.empty((0, 2)), *expected]))
+            ds.close()
+            counts.append(n)
+        assert proc.is_alive()
+    finally:
+        os.kill(proc.pid, signal.SIGKILL)
+        proc.join()
+    assert counts == sorted(counts) and counts[-1] > counts[0]
+
+
+EXIT_SCRIPT = """
+import os, sys
+sys.path.insert(0, sys.argv[2])
+from conftest import synthetic_episode
+from stable_worldmodel.data.writer import HDF5Writer
+
+writer = HDF5Writer(sys.argv[1])  # never closed: interpreter exit closes HDF5, then the descriptor
+writer.write_episodes([synthetic_episode(0, 2), synthetic_episode(1, 3)])
+writer.cycle = writer
+before = open(sys.argv[1], "rb").read()
+pid = os.fork()
+if pid == 0:
+    sys.exit(0)  # a forked child exiting normally must leave its parent's file alone
+os.waitpid(pid, 0)
+print("unchanged" if open(sys.argv[1], "rb").read() == before else "changed by the child")
+"""
+
+
+def test_interpreter_exit_without_close_leaves_a_trimmed_plain_file(tmp_path, synth):
+    path = tmp_path / "exit.h5"
+    script = tmp_path / "exit.py"
+    script.write_text(textwrap.dedent(EXIT_SCRIPT))
+    tests_dir = os.path.dirname(__file__)
+    done = subprocess.run([sys.executable, str(script), str(path), tests_dir], capture_output=True, text=True)
+    assert (done.returncode, done.stdout, done.stderr) == (0, "unchanged\n", "")
+    with h5py.File(path) as f:
+        assert _check_committed(f, synth) == 2
+    assert path.stat().st_size < _superblock.SLACK  # grown ahead while open, trimmed on close
+
+
+@pytest.mark.parametrize("failure", [OSError(28, "No space left on device"), KeyboardInterrupt()])
+def test_io_failure_inside_hdf5_leaves_committed_episodes(tmp_path, monkeypatch, synth, failure):
+    path = tmp_path / "full.h5"
+    armed = [False]
+
+    class Failing(_superblock.SealedFile):
+        def _pwrite(self, view, pos):
+            if armed[0]:
+                raise failure
+            super()._pwrite(view, pos)
+
+    monkeypatch.setattr(_superblock, "SealedFile", Failing)
+    w = HDF5Writer(path)
+    w.write_episodes([synth(0, 2)])
+    armed[0] = True
+    if isinstance(failure, OSError):
+        raised = pytest.raises(DatasetFormatError, match="No space left on device.*1 episodes committed")
+    else:
+        raised = pytest.raises(KeyboardInterrupt)  # Ctrl-C inside HDF5's write still stops the program
+    with raised:
+        w.write_episodes([synth(1, 200)])
+    armed[0] = False
+    with pytest.raises(DatasetFormatError, match="closed"):  # nothing more goes to that file
+        w.write_episodes([synth(1, 3)])
+    with h5py.File(path) as f:
+        assert _check_committed(f, synth) == 1
+    with HDF5Writer(path) as w:  # a new writer appends after the committed episode
+        w.write_episodes([synth(1, _length(1))])
+    with h5py.File(path) as f:
+        assert _check_committed(f, synth) == 2
+
+
+def test_write_after_close_fails_and_keeps_the_file(make_h5, synth):
+    path = make_h5((3,))
+    w = HDF5Writer(path)
+    w.close()
+    with pytest.raises(DatasetFormatError, match="closed"):
+        w.write_episodes([synth(1, 2)])
+    with h5py.File(path) as f:
+        assert f[keys.EP_LEN][:].tolist() == [3]
+
+
+def test_repair_clears_flags_left_by_an_older_writer(make_h5):
     path = make_h5((2,))
     raw = bytearray(path.read_bytes())
     raw[11] = 5  # what HDF5 leaves while a SWMR writer has the file open
