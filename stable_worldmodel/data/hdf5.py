@@ -33,11 +33,12 @@ PRELOAD_BYTES = 256 << 20  # datasets whose loaded columns decode to at most thi
 
 
 def open_h5(path: str | os.PathLike):
-    """Open ``path`` read-only, as plain ``h5py.File(path)`` does, SWMR read as a fallback.
+    """Open ``path`` read-only: as a SWMR reader first, plainly as a fallback.
 
-    The writer seals the file after every commit, so plain opens work while it records; HDF5
-    shares a file already open in this process only with the same flags, hence the order. A
-    file left flagged by a killed writer is repaired first.
+    A SWMR reader can keep reading a file that a writer is still appending to (a plain reader
+    of a live file may fail once the writer has grown it past its slack, see :mod:`.writer`);
+    files in older layouts, or already open plainly in this process, fall back to plain opens.
+    A file left flagged by a killed writer of an older version is repaired first.
     """
     import h5py
 
@@ -46,7 +47,7 @@ def open_h5(path: str | os.PathLike):
             _superblock.repair(path)
         except OSError:  # read-only file: SWMR read still works
             logger.warning("%s is flagged open for write and could not be repaired", path)
-    attempts = (dict(), dict(libver="latest", swmr=True, locking=False), dict(locking=False))
+    attempts = (dict(libver="latest", swmr=True, locking=False), dict(), dict(locking=False))
     for i, kwargs in enumerate(attempts):
         try:
             return h5py.File(path, "r", **kwargs)

@@ -79,7 +79,7 @@ def dataset_info(name: str) -> dict[str, Any]:
     if path.suffix == ".h5":
         from .hdf5 import HDF5Dataset
 
-        ds = HDF5Dataset(path)
+        ds = HDF5Dataset(path, preload=False)  # a few rows are read: no need to decode it all
         fmt = "hdf5"
     else:
         from .folder import FolderDataset

@@ -100,7 +100,7 @@ def record_video_from_dataset(
     if isinstance(dataset, (str, os.PathLike)):
         from .hdf5 import HDF5Dataset
 
-        dataset = HDF5Dataset(dataset, cache_dir=cache_dir)
+        dataset = HDF5Dataset(dataset, cache_dir=cache_dir, preload=False)  # reads a few episodes
     views = [viewname] if isinstance(viewname, str) else list(viewname)
     dataset.check_keys(views)
     below = [keys.GOAL] if keys.GOAL in dataset.column_names and keys.GOAL not in views else []

@@ -268,7 +268,7 @@ def evaluate_from_dataset(
     if isinstance(dataset, (str, os.PathLike)):
         from ..data.hdf5 import HDF5Dataset
 
-        dataset = HDF5Dataset(dataset)
+        dataset = HDF5Dataset(dataset, preload=False)  # reads a few rows
     episodes_idx, start_steps = _check_eval_args(world, dataset, episodes_idx, start_steps, goal_offset_steps, eval_budget)
     rows = [int(dataset.offsets[e]) + s for e, s in zip(episodes_idx, start_steps)]
     starts = [dataset.get_row_data(r) for r in rows]
