@@ -1,8 +1,11 @@
 """Solver benchmark: ms per plan (CEM at the original defaults, MPPI, GD) and WorldModelPolicy env-steps/s.
 
-    python bench/bench_solvers.py [--envs 1,4] [--repeats 5] [--device cpu] [--quick]
+    python bench/bench_solvers.py [--envs 1,4] [--repeats 5] [--device cpu] [--quick] [--act gelu] [--threads 2]
 
-The cost model is a small MLP over (state (8,), flattened plan (H * A,)) -> 256 -> 256 -> 1.
+The cost model is a small MLP over (state (8,), flattened plan (H * A,)) -> 256 -> 256 -> 1
+(``--act gelu`` is the shared harness's model; it runs with 2 torch threads: ``--threads 2``).
+CEM and MPPI lines also give ``model`` (the same number of ``get_cost`` calls on one fixed
+batch, outside any solver) and ``overhead`` (plan - model): what the solver itself costs.
 ``--big`` adds a ~15M-parameter MLP (the GPU latency figure of issue 6; use with --device cuda).
 """
 
@@ -12,15 +15,17 @@ import argparse
 import time
 
 
-def mlp_cost(in_dim: int, width: int, depth: int, device: str):
+def mlp_cost(in_dim: int, width: int, depth: int, device: str, act: str = "relu"):
     import torch
+
+    activation = {"relu": torch.nn.ReLU, "gelu": torch.nn.GELU}[act]
 
     class MLPCost(torch.nn.Module):
         def __init__(self):
             super().__init__()
             layers, dim = [], in_dim
             for _ in range(depth):
-                layers += [torch.nn.Linear(dim, width), torch.nn.ReLU()]
+                layers += [torch.nn.Linear(dim, width), activation()]
                 dim = width
             self.net = torch.nn.Sequential(*layers, torch.nn.Linear(dim, 1))
 
@@ -46,6 +51,29 @@ def time_plan(solver, info, repeats: int, device: str) -> float:
     return sorted(times)[len(times) // 2]
 
 
+def time_model(model, n: int, samples: int, steps: int, shape: tuple[int, int], repeats: int, device: str) -> float:
+    """Median time of ``steps`` get_cost calls on one fixed (n, samples, H, A) batch: the model's share of a plan."""
+    import torch
+
+    candidates = torch.rand(n, samples, *shape, device=device) * 2 - 1
+    info = {"state": torch.randn(n, 1, 1, 8, device=device).expand(n, samples, 1, 8)}
+
+    def run():
+        with torch.inference_mode():
+            for _ in range(steps):
+                model.get_cost(info, candidates)
+        if device.startswith("cuda"):
+            torch.cuda.synchronize()
+
+    run()
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        run()
+        times.append(time.perf_counter() - t0)
+    return sorted(times)[len(times) // 2]
+
+
 def bench_plans(args) -> None:
     import gymnasium as gym
     import numpy as np
@@ -57,9 +85,9 @@ def bench_plans(args) -> None:
     horizon, block, adim = 5, 5, 2
     config = PlanConfig(horizon=horizon, receding_horizon=1, action_block=block)
     samples, steps = (100, 5) if args.quick else (300, 30)
-    sizes = [("mlp 58-256-256-1", 256, 2)] + ([("mlp ~15M", 2730, 3)] if args.big else [])
+    sizes = [(f"mlp 58-256-256-1 {args.act}", 256, 2)] + ([("mlp ~15M", 2730, 3)] if args.big else [])
     for label, width, depth in sizes:
-        model = mlp_cost(8 + horizon * block * adim, width, depth, args.device)
+        model = mlp_cost(8 + horizon * block * adim, width, depth, args.device, args.act)
         params = sum(p.numel() for p in model.parameters())
         for n in args.envs:
             space = gym.spaces.Box(-1, 1, (n, adim), np.float32)
@@ -72,7 +100,13 @@ def bench_plans(args) -> None:
             for name, solver in solvers.items():
                 solver.configure(action_space=space, n_envs=n, config=config)
                 ms = 1000 * time_plan(solver, info, args.repeats, args.device)
-                print(f"{name}_plan_ms  {label} ({params / 1e6:.2f}M)  n_envs={n}  samples={samples} iters={steps}  {ms:9.2f} ms")
+                split = ""
+                if name != "gd":  # gd also backpropagates: a forward-only model time says little there
+                    shape = (horizon, block * adim)
+                    model_ms = 1000 * time_model(model, n, samples, steps, shape, args.repeats, args.device)
+                    split = f"  (model {model_ms:.2f} ms, overhead {ms - model_ms:.2f} ms)"
+                head = f"{name}_plan_ms  {label} ({params / 1e6:.2f}M)  n_envs={n}  samples={samples} iters={steps}"
+                print(f"{head}  {ms:9.2f} ms{split}")
 
 
 def bench_policy(args) -> None:
@@ -108,9 +142,15 @@ def main() -> None:
     parser.add_argument("--device", default="cpu")
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--big", action="store_true", help="also a ~15M-parameter cost model")
+    parser.add_argument("--act", choices=("relu", "gelu"), default="relu", help="MLP activation (gelu: the harness)")
+    parser.add_argument("--threads", type=int, default=None, help="torch.set_num_threads (default: torch's choice)")
     parser.add_argument("--no-policy", action="store_true")
     args = parser.parse_args()
     args.envs = [int(x) for x in args.envs.split(",")]
+    if args.threads:
+        import torch
+
+        torch.set_num_threads(args.threads)
     bench_plans(args)
     if not args.no_policy:
         bench_policy(args)

@@ -17,6 +17,7 @@ import numpy as np
 import torch
 
 from ..errors import ConfigError, SpaceError
+from ._heap import raise_trim_threshold
 
 logger = logging.getLogger(__name__)
 
@@ -61,10 +62,16 @@ class BaseSolver:
       The dtype follows the model's floating parameters (float32 for parameter-free models).
     - ``seed``: seeds a private ``torch.Generator``; the same seed gives the same sequence
       of plans. :meth:`set_seed` restarts the stream.
+
+    Solvers that set ``_inference_mode`` (CEM, iCEM, MPPI, random shooting) call
+    ``get_cost`` under ``torch.inference_mode()``; :meth:`solve` still returns ordinary tensors.
     """
 
     #: name under which the class is registered (set by ``@register_solver``)
     name: str = ""
+    #: run :meth:`_optimize` under ``torch.inference_mode()`` (no autograd bookkeeping, cheaper
+    #: per op than ``no_grad``); for solvers that never differentiate through the model
+    _inference_mode: bool = False
 
     def __init__(
         self,
@@ -100,6 +107,7 @@ class BaseSolver:
         self._auto_chunk: int | None = None
         self._rows = (0, 0)
         self._draw = 0
+        self._row_starts: tuple = (None, None)
         self._solve_seed = 0
 
     # -- validation helper ------------------------------------------------------------
@@ -135,11 +143,18 @@ class BaseSolver:
             )
         self.dtype = ref.dtype if ref is not None else torch.float32
         self._gen = torch.Generator(device=self.device)
+        if self.device.type == "cpu":
+            raise_trim_threshold()  # batched get_cost activations stay in the heap (see _heap.py)
         self._auto_chunk = None
         low, high = self._bounds_arrays(action_space)
         self._low = torch.as_tensor(low, dtype=self.dtype, device=self.device)
         self._high = torch.as_tensor(high, dtype=self.dtype, device=self.device)
         self._bounded = bool(np.isfinite(low).any() or np.isfinite(high).any())
+        # one low and one high for every coordinate: clamp with scalars (a broadcast clamp is 4x slower on the CPU)
+        low_t, high_t = self._low.cpu().flatten().tolist(), self._high.cpu().flatten().tolist()
+        uniform = len(set(low_t)) == 1 and len(set(high_t)) == 1
+        self._scalar_bounds = (low_t[0], high_t[0]) if uniform else None
+        self._dense_bounds: tuple = (None, None, None)
 
     def _check_space(self, action_space: gym.Space) -> None:
         """Subclasses restrict the accepted action spaces here (default: Box)."""
@@ -234,7 +249,10 @@ class BaseSolver:
         self._rows, self._draw = (start, stop), 0
         rows = {key: self._slice(value, start, stop) for key, value in info.items()}
         sub_init = None if init is None else init[start:stop]
-        return self._optimize(rows, sub_init)
+        if not self._inference_mode:
+            return self._optimize(rows, sub_init)
+        with torch.inference_mode():
+            return self._optimize(rows, sub_init)
 
     def _optimize(self, info: dict, init_action: torch.Tensor | None) -> dict:
         """The algorithm: ``info`` rows ``(b, ...)``, ``init_action: (b, H, A)`` or None.
@@ -330,11 +348,24 @@ class BaseSolver:
 
     def _clamp(self, x: torch.Tensor, rows: tuple[int, int] | None = None) -> torch.Tensor:
         """Clamp ``(b, ..., A)`` into the Box bounds of ``rows`` (default: the current rows)."""
-        return torch.clamp(x, *self._bounds_like(x, rows)) if self._bounded else x
+        if not self._bounded:
+            return x
+        return torch.clamp(x, *(self._scalar_bounds or self._bounds_like(x, rows)))
 
     def _clamp_(self, x: torch.Tensor) -> torch.Tensor:
         """In-place :meth:`_clamp` for the current rows (for freshly made tensors)."""
-        return x.clamp_(*self._bounds_like(x, None)) if self._bounded else x
+        if not self._bounded:
+            return x
+        if self._scalar_bounds is not None:
+            return x.clamp_(*self._scalar_bounds)
+        if x.device.type != "cpu":
+            return x.clamp_(*self._bounds_like(x, None))
+        key = (self._rows, x.shape)
+        if self._dense_bounds[0] != key:  # a broadcast clamp is 4x slower on the CPU: dense bounds, cached
+            with torch.inference_mode(False):  # usable in and out of inference mode
+                low, high = self._bounds_like(x, None)
+                self._dense_bounds = (key, low.expand(x.shape).contiguous(), high.expand(x.shape).contiguous())
+        return x.clamp_(*self._dense_bounds[1:])
 
     def _reseed(self) -> torch.Generator:
         """The generator for the next draw, seeded by (solve, draw index): chunking-invariant."""
@@ -359,14 +390,19 @@ class BaseSolver:
     def _elites(self, candidates: torch.Tensor, costs: torch.Tensor, k: int) -> tuple[torch.Tensor, torch.Tensor]:
         """The ``k`` cheapest candidates, cheapest first: costs ``(b, k)`` and plans ``(b, k, H, A)``."""
         elite_costs, idx = torch.topk(costs, k, dim=1, largest=False, sorted=True)
-        elites = candidates.gather(1, idx[:, :, None, None].expand(-1, -1, *candidates.shape[2:]))
-        return elite_costs, elites
+        b, s = costs.shape
+        if self._row_starts[0] != (b, s, idx.device):  # (b, 1) offsets of each env's first candidate
+            with torch.inference_mode(False):
+                self._row_starts = ((b, s, idx.device), torch.arange(0, b * s, s, device=idx.device).unsqueeze(1))
+        rows = (idx + self._row_starts[1]).view(-1)  # flat candidate index
+        elites = candidates.reshape(b * s, -1).index_select(0, rows)  # 2x faster than gather on the CPU
+        return elite_costs, elites.view(b, k, *candidates.shape[2:])
 
     @staticmethod
     def _mean_std(elites: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """Mean and (biased) std of ``elites: (b, k, H, A)`` over k (faster than ``Tensor.std`` on CPU)."""
         mean = elites.mean(dim=1)
-        return mean, (elites - mean.unsqueeze(1)).square().mean(dim=1).sqrt()
+        return mean, (elites - mean.unsqueeze(1)).square_().mean(dim=1).sqrt_()
 
     def _gaussian_start(self, info: dict, init_action: torch.Tensor | None) -> tuple[torch.Tensor, torch.Tensor, dict]:
         """Start of a sampling solver: ``mean (b, H, A)``, ``std = var_scale`` and the info expanded to S."""
@@ -381,7 +417,7 @@ class BaseSolver:
     def _sample_around(self, mean: torch.Tensor, std: torch.Tensor, num_samples: int) -> torch.Tensor:
         """Gaussian candidates ``(b, S, H, A)`` around ``mean: (b, H, A)``; candidate 0 is the mean."""
         noise = self._randn(num_samples, self.horizon, self.action_dim)
-        noise[:, 0] = 0
+        noise[:, 0].zero_()
         candidates = torch.addcmul(mean.unsqueeze(1), std.unsqueeze(1), noise, out=noise)
         return self._clamp_(candidates)
 

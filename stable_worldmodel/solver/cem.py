@@ -38,6 +38,8 @@ class CEMSolver(BaseSolver):
         torch.Size([3, 2, 2])
     """
 
+    _inference_mode = True
+
     def __init__(
         self,
         model: Any,
@@ -51,7 +53,6 @@ class CEMSolver(BaseSolver):
     ) -> None:
         super().__init__(model, batch_size, num_samples, var_scale, device, seed, n_steps, topk)
 
-    @torch.no_grad()
     def _optimize(self, info: dict, init_action: torch.Tensor | None) -> dict:
         mean, std, info_s = self._gaussian_start(info, init_action)
         for _ in range(self.n_steps):

@@ -26,6 +26,18 @@ def colored_noise(white: torch.Tensor, beta: float) -> torch.Tensor:
     return torch.fft.irfft(spectrum, n=h, dim=-1, norm="ortho") / torch.sqrt(total / h)
 
 
+def coloring_matrix(
+    h: int, beta: float, device: torch.device | str | None = None, dtype: torch.dtype = torch.float32
+) -> torch.Tensor:
+    """The ``(H, H)`` matrix ``M`` with ``colored_noise(white, beta) == white @ M`` (up to rounding).
+
+    :func:`colored_noise` is linear along H, so row ``i`` of ``M`` is the colored unit
+    vector ``e_i``; one small matmul per iteration replaces an FFT round trip (the FFT and its
+    bookkeeping were a third of an iCEM plan on the CPU).
+    """
+    return colored_noise(torch.eye(h, dtype=torch.float64), beta).to(device=device, dtype=dtype)
+
+
 @register_solver("icem")
 class ICEMSolver(BaseSolver):
     """Improved CEM, batched over envs.
@@ -37,6 +49,8 @@ class ICEMSolver(BaseSolver):
     and the cheapest plan ever evaluated is returned. ``batch_size`` as in CEM.
     Returns ``actions: (B, H, A)``, ``costs: (B,)``, ``mean``, ``var`` (std).
     """
+
+    _inference_mode = True
 
     def __init__(
         self,
@@ -61,21 +75,25 @@ class ICEMSolver(BaseSolver):
         self.noise_beta, self.momentum = float(noise_beta), float(momentum)
         self.n_keep = int(elite_keep_frac * self.topk)
 
-    @torch.no_grad()
     def _optimize(self, info: dict, init_action: torch.Tensor | None) -> dict:
         mean = self._initial_mean(init_action)
         std = torch.full_like(mean, self.var_scale)
         b, h, a = mean.shape
-        info_new = self._expand(info, self.num_samples)
-        info_all = self._expand(info, self.num_samples + self.n_keep)
+        s = self.num_samples
+        color = None if self.noise_beta == 0 or h == 1 else coloring_matrix(h, self.noise_beta, self.device, self.dtype)
+        info_new = self._expand(info, s)
+        info_all = self._expand(info, s + self.n_keep)
         kept = None
         best, best_cost = mean, torch.full((b,), float("inf"), device=self.device, dtype=self.dtype)
         for _ in range(self.n_steps):
-            noise = colored_noise(self._randn(self.num_samples, a, h), self.noise_beta).transpose(-1, -2)
-            noise[:, 0] = 0  # candidate 0 is the mean
-            candidates = self._clamp(mean.unsqueeze(1) + std.unsqueeze(1) * noise)
+            white = self._randn(s, a, h)  # colored along H, then laid out (b, S, H, A)
+            noise = (white if color is None else torch.matmul(white, color)).transpose(-1, -2)
+            noise[:, 0].zero_()  # candidate 0 is the mean
+            # new candidates, then the kept elites, in one contiguous (b, S [+ n_keep], H, A) tensor
+            candidates = mean.new_empty((b, s + (0 if kept is None else self.n_keep), h, a))
+            self._clamp_(torch.addcmul(mean.unsqueeze(1), std.unsqueeze(1), noise, out=candidates[:, :s]))
             if kept is not None:
-                candidates = torch.cat([candidates, kept], dim=1)
+                candidates[:, s:] = kept
             costs = self._cost(info_all if kept is not None else info_new, candidates)
             elite_costs, elites = self._elites(candidates, costs, self.topk)
             better = elite_costs[:, 0] < best_cost

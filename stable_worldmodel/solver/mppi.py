@@ -25,6 +25,8 @@ class MPPISolver(BaseSolver):
     Returns ``actions: (B, H, A)`` (final mean), ``costs: (B,)``, ``mean``, ``var`` (std).
     """
 
+    _inference_mode = True
+
     def __init__(
         self,
         model: Any,
@@ -42,7 +44,6 @@ class MPPISolver(BaseSolver):
             raise ConfigError(f"MPPISolver requires temperature > 0, got {temperature!r}")
         self.temperature = float(temperature)
 
-    @torch.no_grad()
     def _optimize(self, info: dict, init_action: torch.Tensor | None) -> dict:
         mean, std, info_s = self._gaussian_start(info, init_action)
         for _ in range(self.n_steps):

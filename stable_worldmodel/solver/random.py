@@ -20,6 +20,8 @@ class RandomSolver(BaseSolver):
     Returns the cheapest plan seen, ``actions: (B, H, A)``, and its ``costs: (B,)``.
     """
 
+    _inference_mode = True
+
     def __init__(
         self,
         model: Any,
@@ -32,7 +34,6 @@ class RandomSolver(BaseSolver):
     ) -> None:
         super().__init__(model, batch_size, num_samples, var_scale, device, seed, n_steps)
 
-    @torch.no_grad()
     def _optimize(self, info: dict, init_action: torch.Tensor | None) -> dict:
         start, stop = self._rows
         low, high = self._low[start:stop, None, None], self._high[start:stop, None, None]
