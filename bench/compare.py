@@ -1,6 +1,7 @@
 """Side-by-side table (markdown) of two reports of the shared harness (../shared/bench/swm_bench.py).
 
 Usage: python bench/compare.py bench/results/peer_full.json bench/results/ours_full.json
+Reports made with ``swm_bench.py --aggregate`` (several runs) are read too: their medians are compared.
 A ratio > 1 always means "ours is better" (faster, or smaller for sizes and times).
 """
 
@@ -13,7 +14,12 @@ LOWER_IS_BETTER_UNITS = {"s", "bytes/row", "bytes/frame", "MB"}
 
 
 def load(path: str) -> dict:
-    return json.load(open(path))["metrics"]
+    """``{metric: {"status", "value", "unit"}}`` of one report, or of the medians of an aggregate."""
+    metrics = json.load(open(path))["metrics"]
+    for metric in metrics.values():
+        if "median" in metric and "status" not in metric:
+            metric.update(status="ok", value=metric["median"])
+    return metrics
 
 
 def main() -> None:

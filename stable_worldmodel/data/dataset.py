@@ -136,8 +136,13 @@ class Dataset(_TorchDataset):
         """``(episode, step)`` of the first row of sample ``idx``."""
         if isinstance(idx, bool) or not isinstance(idx, (int, np.integer)):
             raise TypeError(f"{type(self).__name__} indices must be ints, got {type(idx).__name__}")
-        eps, steps = self._locate_many(np.asarray([idx], np.int64))
-        return int(eps[0]), int(steps[0])
+        cum, _ = self._sample_index()
+        n = int(cum[-1])
+        i = int(idx) + n if idx < 0 else int(idx)
+        if not 0 <= i < n:
+            raise IndexError(f"{type(self).__name__} index {int(idx)} out of range for {n} samples")
+        ep = int(np.searchsorted(cum, i, side="right") - 1)
+        return ep, i - int(cum[ep])
 
     def _locate_many(self, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Episodes and steps of the samples ``idx`` (int array, negatives count from the end)."""
@@ -179,13 +184,16 @@ class Dataset(_TorchDataset):
         cols = {col: self._read_windows(col, starts) for col in self.keys_to_load}
         if keys.ACTION in cols:  # (B, span, A) -> (B, T, frameskip * A)
             cols[keys.ACTION] = cols[keys.ACTION].reshape(len(starts), self.num_steps, -1)
-        return to_tensors(cols, batch=True)
+        return to_tensors(cols, batch=True, owned=True)  # gathered rows are fresh arrays
 
     def __getitem__(self, idx: int) -> dict[str, Any]:
         prepare_worker()
-        if isinstance(idx, bool) or not isinstance(idx, (int, np.integer)):
-            raise TypeError(f"{type(self).__name__} indices must be ints, got {type(idx).__name__}")
-        item = {k: v[0] for k, v in self._batch([idx]).items()}
+        start, span = self.sample_rows(idx), self.span
+        item = {}
+        for col in self.keys_to_load:
+            rows = self._read(col, start, start + span)
+            item[col] = rows.reshape(self.num_steps, -1) if col == keys.ACTION else rows[:: self.frameskip]
+        item = to_tensors(item)
         return self.transform(item) if self.transform is not None else item
 
     def __getitems__(self, indices: Sequence[int]) -> list[dict[str, Any]]:
@@ -255,9 +263,10 @@ class Dataset(_TorchDataset):
         )
 
 
-def to_tensors(item: dict[str, np.ndarray], batch: bool = False) -> dict[str, Any]:
+def to_tensors(item: dict[str, np.ndarray], batch: bool = False, owned: bool = False) -> dict[str, Any]:
     """numpy columns -> torch tensors; images ``(T, H, W, C)`` -> ``(T, C, H, W)`` (with a
-    leading batch axis when ``batch``)."""
+    leading batch axis when ``batch``). The tensors never share memory with a reader's cache:
+    arrays are copied unless ``owned`` says they are fresh."""
     import torch
 
     out = {}
@@ -265,5 +274,5 @@ def to_tensors(item: dict[str, np.ndarray], batch: bool = False) -> dict[str, An
         arr = np.asarray(v)
         if image_like(arr[0] if batch else arr):
             arr = np.moveaxis(arr, -1, -3)
-        out[k] = torch.from_numpy(np.ascontiguousarray(arr))
+        out[k] = torch.from_numpy(np.ascontiguousarray(arr) if owned else np.array(arr, order="C"))
     return out

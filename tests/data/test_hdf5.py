@@ -146,3 +146,14 @@ def test_dataloader_batches_equal_direct_reads(make_h5):
         want = torch.stack([ds[i][k] for i in range(len(ds))])
         torch.testing.assert_close(got, want, rtol=0, atol=0, equal_nan=True)
     got.add_(1) if got.dtype != torch.bool else got.logical_not_()  # writable, no warning
+
+
+@pytest.mark.parametrize("preload", [True, False])
+def test_items_do_not_share_memory_with_the_cache(make_h5, preload):
+    ds = HDF5Dataset(make_h5(LENGTHS), num_steps=2, preload=preload)
+    before = {k: v.clone() for k, v in ds[3].items()}
+    for item in (ds[3], ds.__getitems__([3, 4])[0], ds.load_episode(0), ds.load_chunk([0], 3, 5)[0]):
+        for v in item.values():
+            v.zero_() if v.dtype != torch.bool else v.logical_not_()
+    for k, v in ds[3].items():
+        torch.testing.assert_close(v, before[k], rtol=0, atol=0, equal_nan=True)
