@@ -22,8 +22,9 @@ import numpy as np
 from .. import keys
 from ..errors import DatasetFormatError
 from . import _superblock
-from .dataset import Dataset, image_like
+from .dataset import Dataset
 from .utils import resolve_dataset_path
+from .writer import is_image_column
 
 logger = logging.getLogger(__name__)
 
@@ -112,7 +113,7 @@ class HDF5Dataset(Dataset):
 
         self._columns = [k for k, v in f.items() if isinstance(v, h5py.Dataset) and k not in (keys.EP_LEN, keys.EP_OFFSET)]
         self._shapes = {k: (tuple(f[k].shape[1:]), f[k].dtype) for k in self._columns}
-        self._images = {k for k, (shape, dtype) in self._shapes.items() if image_like(np.empty((0, *shape), dtype))}
+        self._images = {k for k, (shape, dtype) in self._shapes.items() if is_image_column(shape, dtype)}
         self._block_rows = {k: self._choose_block(f[k]) for k in self._columns}
         self._max_blocks = {
             k: max(8, CACHE_BYTES // max(self._block_rows[k] * f[k].dtype.itemsize * int(np.prod(f[k].shape[1:])), 1))
@@ -132,7 +133,7 @@ class HDF5Dataset(Dataset):
             rows = f[col][:end]
             # images are kept (N, C, H, W) so that items need no transposing copy; _read
             # hands out (N, H, W, C) views of them like every other reader
-            self._cache[col] = np.ascontiguousarray(np.moveaxis(rows, -1, -3)) if image_like(rows) else rows
+            self._cache[col] = np.ascontiguousarray(np.moveaxis(rows, -1, -3)) if col in self._images else rows
 
     # -- file handle --------------------------------------------------------------------------
     def _handle(self):
