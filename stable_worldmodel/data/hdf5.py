@@ -38,7 +38,8 @@ def open_h5(path: str | os.PathLike):
 
     A SWMR reader can keep reading a file that a writer is still appending to (a plain reader
     of a live file may fail once the writer has grown it past its slack, see :mod:`.writer`);
-    files in older layouts, or already open plainly in this process, fall back to plain opens.
+    files in older layouts, or already open plainly in this process, fall back to plain opens;
+    file systems without locks to opens without locking.
     A file left flagged by a killed writer of an older version is repaired first.
     """
     import h5py
@@ -48,7 +49,14 @@ def open_h5(path: str | os.PathLike):
             _superblock.repair(path)
         except OSError:  # read-only file: SWMR read still works
             logger.warning("%s is flagged open for write and could not be repaired", path)
-    attempts = (dict(libver="latest", swmr=True, locking=False), dict(), dict(locking=False))
+    # HDF5 shares a file opened twice in one process only with compatible flags: a later plain
+    # h5py.File(path) joins a SWMR reader opened with default locking, not the other way round
+    attempts = (
+        dict(libver="latest", swmr=True),
+        dict(),
+        dict(libver="latest", swmr=True, locking=False),  # file systems without locks, or a locking writer
+        dict(locking=False),
+    )
     for i, kwargs in enumerate(attempts):
         try:
             return h5py.File(path, "r", **kwargs)

@@ -157,3 +157,15 @@ def test_items_do_not_share_memory_with_the_cache(make_h5, preload):
             v.zero_() if v.dtype != torch.bool else v.logical_not_()
     for k, v in ds[3].items():
         torch.testing.assert_close(v, before[k], rtol=0, atol=0, equal_nan=True)
+
+
+def test_plain_h5py_opens_the_file_next_to_a_dataset(make_h5):
+    import h5py
+
+    path = make_h5(LENGTHS)
+    ds = HDF5Dataset(path, preload=False)
+    ds[0]
+    with h5py.File(path) as f, h5py.File(path, "r") as g:  # the usual inspection, in the same process
+        assert f[keys.EP_LEN][:].tolist() == list(LENGTHS) == g[keys.EP_LEN][:].tolist()
+    with h5py.File(path, "r") as f:  # and the other way round
+        assert HDF5Dataset(path, preload=False)[0][keys.STATE].shape == (1, 2)
