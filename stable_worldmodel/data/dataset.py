@@ -161,18 +161,20 @@ class Dataset(_TorchDataset):
         return int(self._sample_index()[1][ep]) + step
 
     # -- items --------------------------------------------------------------------------------
+    def _row_step(self, col: str) -> int:
+        """A window keeps every row of ``action`` (grouped later) and every ``frameskip``-th row
+        of the other columns."""
+        return 1 if col == keys.ACTION else self.frameskip
+
     def _row_offsets(self, col: str) -> np.ndarray:
-        """Rows of a window that ``col`` keeps: the whole span for ``action``, every
-        ``frameskip``-th row from the first otherwise."""
-        step = 1 if col == keys.ACTION else self.frameskip
-        return np.arange(0, self.span, step)
+        """Offsets in a window of the rows that ``col`` keeps."""
+        return np.arange(0, self.span, self._row_step(col))
 
     def _read_windows(self, col: str, starts: np.ndarray) -> np.ndarray:
         """Kept rows ``(B, len(_row_offsets(col)), ...)`` of ``col`` for windows starting at the
         global rows ``starts``; kinds that can gather many windows at once override it."""
-        span = self.span
-        keep = slice(None, None, 1 if col == keys.ACTION else self.frameskip)
-        return np.stack([self._read(col, int(s), int(s) + span)[keep] for s in starts])
+        span, step = self.span, self._row_step(col)
+        return np.stack([self._read(col, int(s), int(s) + span)[::step] for s in starts])
 
     def _batch(self, indices: Sequence[int]) -> dict[str, Any]:
         """Columns of the samples ``indices`` as ``(B, T, ...)`` tensors (images ``(B, T, C, H, W)``)."""
@@ -191,8 +193,9 @@ class Dataset(_TorchDataset):
         start, span = self.sample_rows(idx), self.span
         item = {}
         for col in self.keys_to_load:
-            rows = self._read(col, start, start + span)
-            item[col] = rows.reshape(self.num_steps, -1) if col == keys.ACTION else rows[:: self.frameskip]
+            item[col] = self._read(col, start, start + span)[:: self._row_step(col)]
+        if keys.ACTION in item:  # (span, A) -> (T, frameskip * A)
+            item[keys.ACTION] = item[keys.ACTION].reshape(self.num_steps, -1)
         item = to_tensors(item)
         return self.transform(item) if self.transform is not None else item
 

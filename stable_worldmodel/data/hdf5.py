@@ -123,17 +123,14 @@ class HDF5Dataset(Dataset):
         self._shapes = {k: (tuple(f[k].shape[1:]), f[k].dtype) for k in self._columns}
         self._images = {k for k, (shape, dtype) in self._shapes.items() if is_image_column(shape, dtype)}
         self._block_rows = {k: self._choose_block(f[k]) for k in self._columns}
-        self._max_blocks = {
-            k: max(8, CACHE_BYTES // max(self._block_rows[k] * f[k].dtype.itemsize * int(np.prod(f[k].shape[1:])), 1))
-            for k in self._columns
-        }
+        self._max_blocks = {k: max(8, CACHE_BYTES // max(self._block_rows[k] * self._row_bytes(k), 1)) for k in self._columns}
         if keys_to_load is not None:
             self.check_keys(keys_to_load)
         self._cache: dict[str, np.ndarray] = {}
         end = self.num_rows
         to_cache = self.check_keys(list(keys_to_cache or []))
         if preload is None:
-            decoded = sum(end * self._shapes[c][1].itemsize * int(np.prod(self._shapes[c][0])) for c in self.keys_to_load)
+            decoded = sum(end * self._row_bytes(c) for c in self.keys_to_load)
             preload = decoded <= PRELOAD_BYTES
         if preload:
             to_cache += [c for c in self.keys_to_load if c not in to_cache]
@@ -179,6 +176,11 @@ class HDF5Dataset(Dataset):
         """Per-row shape and dtype of ``col``."""
         self.check_keys([col])
         return self._shapes[col]
+
+    def _row_bytes(self, col: str) -> int:
+        """Decoded bytes of one row of ``col``."""
+        shape, dtype = self._shapes[col]
+        return int(np.prod(shape, dtype=np.int64)) * dtype.itemsize
 
     def _cached(self, col: str) -> np.ndarray | None:
         """The in-memory rows of ``col`` as ``(N, ...)`` (images as ``(N, H, W, C)`` views), or None."""
