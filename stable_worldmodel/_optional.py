@@ -15,6 +15,7 @@ EXTRAS = {
     "av": "video",
     "decord": "video",
     "hypothesis": "dev",
+    "transformers": "vit",
 }
 
 

@@ -19,7 +19,7 @@ from ..errors import ConfigError, SWMError, unknown_name
 USAGE_EXIT = 2
 USER_ERROR_EXIT = 1
 
-USER_ERRORS: tuple[type[BaseException], ...] = (SWMError, KeyError, ValueError)
+USER_ERRORS: tuple[type[BaseException], ...] = (SWMError, KeyError, ValueError, FileNotFoundError, FileExistsError)
 
 
 def one_line(message: str) -> str:
@@ -39,10 +39,11 @@ def error_line(exc: BaseException) -> str:
 
 
 def is_user_error(exc: BaseException) -> bool:
-    """An :class:`SWMError`, or a ``KeyError`` / ``ValueError`` raised by stable_worldmodel code itself."""
+    """An :class:`SWMError`, or a ``KeyError`` / ``ValueError`` / missing or existing file raised by
+    stable_worldmodel code itself."""
     if isinstance(exc, SWMError):
         return True
-    if not isinstance(exc, (KeyError, ValueError)):
+    if not isinstance(exc, USER_ERRORS):
         return False
     tb = exc.__traceback__
     if tb is None:

@@ -71,7 +71,7 @@ def collect(
 
 def eval_cmd(
     env: EnvArg,
-    policy: PolicyOpt = "random",
+    policy: Annotated[str, typer.Option("--policy", "-p", metavar="POLICY", help="random, expert, or wm:RUN (plan with checkpoint RUN, see `swm list model`).")] = "random",
     episodes: Annotated[int, typer.Option("--episodes", "-n", parser=int_in(1), metavar="N", help="Episodes to evaluate.")] = 20,
     seed: SeedOpt = 0,
     variation: VariationOpt = None,
@@ -79,26 +79,48 @@ def eval_cmd(
     num_envs: NumEnvsOpt = 1,
     max_steps: MaxStepsOpt = None,
     image_size: ImageSizeOpt = 64,
+    solver: Annotated[str, typer.Option("--solver", metavar="NAME", help="Planner of wm: policies: cem, icem, mppi, gd or random.")] = "cem",
+    horizon: Annotated[int, typer.Option("--horizon", parser=int_in(1), metavar="H", help="Planned action blocks (wm: policies).")] = 5,
+    receding_horizon: Annotated[int | None, typer.Option("--receding-horizon", parser=int_in(1), metavar="R", help="Blocks executed before replanning (default: all H).", show_default=False)] = None,
+    samples: Annotated[int, typer.Option("--samples", parser=int_in(1), metavar="S", help="Candidates per solver iteration.")] = 300,
+    iterations: Annotated[int, typer.Option("--iterations", parser=int_in(1), metavar="K", help="Solver iterations per plan.")] = 30,
+    device: Annotated[str, typer.Option("--device", metavar="DEV", help="Where wm: policies plan: auto, cpu, cuda, mps.")] = "auto",
+    json_path: Annotated[Path | None, typer.Option("--json", metavar="FILE", help="Write success rate, 95% CI, episodes, seeds and the protocol as JSON.", dir_okay=False)] = None,
+    from_dataset: Annotated[str | None, typer.Option("--from-dataset", metavar="NAME", help="Start from held-out episodes of this dataset (upstream's protocol).", show_default=False)] = None,
+    goal_offset: Annotated[int, typer.Option("--goal-offset", parser=int_in(1), metavar="G", help="With --from-dataset: the goal is the state G steps later.")] = 25,
+    budget: Annotated[int, typer.Option("--budget", parser=int_in(1), metavar="N", help="With --from-dataset: steps allowed to reach the goal.")] = 50,
 ) -> None:
     """Evaluate a policy on ENV and print its success rate with a 95% confidence interval.
 
-    Example: swm eval swm/TwoRoom-v1 --policy expert --episodes 50 --video videos/
+    Example: swm eval swm/TwoRoom-v1 --policy wm:tr-lewm --solver cem --episodes 50 --num-envs 10 --json out.json
     """
     from .display import console, success_table
-    from .stats import SuccessSummary
-    from .worlds import check_policy, episode_limit, evaluate_policy, make_world, reset_options, resolve_env
+    from .evaluation import evaluate_cli
+    from .worlds import check_policy, episode_limit, resolve_env
 
     env = resolve_env(env)
     policy = check_policy(policy)
+    plan = None
+    if policy.startswith("wm:"):
+        from ..planning.learned import PlanSettings
+
+        plan = PlanSettings(solver=solver, horizon=horizon, receding_horizon=receding_horizon, samples=samples, iterations=iterations, seed=seed)
     max_steps = episode_limit(env, max_steps)
     out = console()
-    with make_world(env, num_envs=num_envs, image_size=image_size, max_steps=max_steps, seed=seed) as world:
-        results = evaluate_policy(world, policy, episodes, seed, variation or [])
-        summary = SuccessSummary.from_results(policy, results)
-        out.print(success_table(f"{env}: seeds {seed}..{seed + episodes - 1}, at most {max_steps} steps", [summary]))
-        if video is not None:
-            paths = world.record_video(video, max_steps=max_steps, seed=seed, options=reset_options(variation or []))
-            out.print("Videos: " + ", ".join(str(p) for p in paths), soft_wrap=True)
+    summary, title, record = evaluate_cli(
+        env, policy, episodes=episodes, seed=seed, variation=variation or [], num_envs=num_envs, max_steps=max_steps,
+        image_size=image_size, plan=plan, device=device, from_dataset=from_dataset, goal_offset=goal_offset, budget=budget,
+        video=video,
+    )
+    out.print(success_table(title, [summary]))
+    if record.get("videos"):
+        out.print("Videos: " + ", ".join(record["videos"]), soft_wrap=True)
+    if json_path is not None:
+        import json
+
+        json_path.parent.mkdir(parents=True, exist_ok=True)
+        json_path.write_text(json.dumps(record, indent=2) + "\n")
+        out.print(f"Results: {json_path}", soft_wrap=True)
 
 
 def _factor_count(env_id: str) -> str:

@@ -117,12 +117,14 @@ def _register() -> None:
     from .demo import demo
     from .pipeline import collect, envs, eval_cmd, fovs
     from .resources import delete, list_cmd, show
+    from .train import train_cmd
 
     app.command("list")(list_cmd)
     app.command("show")(show)
     app.command("delete")(delete)
     app.command("collect")(collect)
     app.command("eval")(eval_cmd)
+    app.command("train")(train_cmd)
     app.command("envs")(envs)
     app.command("fovs")(fovs)
     app.command("demo")(demo)

@@ -32,17 +32,37 @@ def resolve_env(env_id: str) -> str:
     raise unknown_name("environment", env_id, list_envs())
 
 
+#: prefix of a learned world model policy: ``wm:<run>`` plans with checkpoint ``<run>``
+WM_PREFIX = "wm:"
+
+
 def check_policy(name: str) -> str:
-    """``name`` when it is one of :data:`POLICIES`."""
-    return check_choice("policy", name, POLICIES)
+    """``name`` when it is one of :data:`POLICIES` or ``wm:<run>`` (a checkpoint that exists)."""
+    if name.startswith(WM_PREFIX):
+        from ..wm.utils import resolve_checkpoint
+
+        run = name[len(WM_PREFIX) :]
+        if not run:
+            raise unknown_name("policy", name, [*POLICIES, "wm:<run>"])
+        resolve_checkpoint(run)  # FileNotFoundError naming where it looked, with "did you mean"
+        return name
+    return check_choice("policy", name, [*POLICIES, "wm:<run>"])
 
 
-def make_policy(name: str, env_id: str, seed: int | None = None) -> Any:
-    """A fresh batched policy: ``random`` (seeded with ``seed``) or the env's scripted ``expert``."""
+def make_policy(name: str, env_id: str, seed: int | None = None, plan: Any = None, device: str = "auto") -> Any:
+    """A fresh batched policy: ``random`` (seeded with ``seed``), the env's scripted ``expert``,
+    or ``wm:<run>`` planning with checkpoint ``<run>`` (``plan``: a
+    :class:`~stable_worldmodel.planning.learned.PlanSettings`)."""
     from ..envs import expert_policy
     from ..policy import RandomPolicy
 
-    if check_policy(name) == "random":
+    name = check_policy(name)
+    if name.startswith(WM_PREFIX):
+        from ..planning.learned import PlanSettings, world_model_policy
+
+        settings = plan or PlanSettings(seed=seed or 0)
+        return world_model_policy(name[len(WM_PREFIX) :], settings, device=device)[0]
+    if name == "random":
         return RandomPolicy(seed=seed)
     return expert_policy(env_id)
 
@@ -107,13 +127,15 @@ def evaluate_policy(
     episodes: int,
     seed: int | None,
     factors: Sequence[str] = (),
+    plan: Any = None,
+    device: str = "auto",
 ) -> dict[str, Any]:
     """Set a fresh ``policy_name`` policy on ``world`` and run ``World.evaluate``.
 
     Episode ``k`` uses seed ``seed + k``, so two policies evaluated with the same ``seed``
     face the same start and goal configurations.
     """
-    world.set_policy(make_policy(policy_name, world.env_name, seed=seed))
+    world.set_policy(make_policy(policy_name, world.env_name, seed=seed, plan=plan, device=device))
     return world.evaluate(episodes=episodes, seed=seed, options=reset_options(check_factors(world, factors)))
 
 

@@ -29,8 +29,10 @@ class PointEnv(DatasetResetMixin, gym.Env):
     success_distance: float = 1.0
     proprio_dim: int = 2
 
-    def __init__(self, render_mode: str | None = "rgb_array", render_size: tuple[int, int] = (224, 224)):
+    def __init__(self, render_mode: str | None = "rgb_array", render_size: tuple[int, int] = (224, 224), render_target: bool = True):
         self.render_mode = render_mode
+        #: draw the goal disk in the frames (the goal image is then the agent on the goal disk)
+        self.render_target = bool(render_target)
         self.render_size = (int(render_size[0]), int(render_size[1]))
         self.world_size = 1.0
         self._pos = np.zeros(2)
@@ -73,7 +75,7 @@ class PointEnv(DatasetResetMixin, gym.Env):
         return self._obs(), self._info()
 
     def render(self) -> np.ndarray:
-        return self._draw(self._pos, show_goal=True)
+        return self._draw(self._pos, show_goal=self.render_target)
 
     def _transition(self):
         """The ``step`` return value once the agent has moved."""
@@ -108,7 +110,7 @@ class PointEnv(DatasetResetMixin, gym.Env):
 
     def _info(self) -> dict[str, Any]:
         if self._goal_img is None:  # the goal image only changes on reset
-            self._goal_img = self._draw(self._goal, show_goal=False)
+            self._goal_img = self._draw(self._goal, show_goal=self.render_target)  # what the agent sees at the goal
         goal_state = self._state(goal=True)
         return {
             keys.GOAL: self._goal_img.copy(),

@@ -46,8 +46,9 @@ class WorldModelPolicy(BasePolicy):
     - Returns actions shaped like ``env.action_space`` ``(B, ...)``.
 
     The infos are passed with all their history frames: make the World's ``history_size``
-    equal to ``config.history_len``. An env reset by the World mid-plan keeps executing the
-    queued actions until the next replan; :meth:`reset_plan` forces one.
+    equal to ``config.history_len``. When an env starts a new episode mid-plan (its
+    ``step_idx`` info is 0), every env replans without warm start, so no env acts on a plan
+    made for its previous episode; :meth:`reset_plan` forces a replan too.
     """
 
     def __init__(
@@ -105,11 +106,23 @@ class WorldModelPolicy(BasePolicy):
         env = self._require_env()
         if self.solver.n_envs is None:
             raise ConfigError("WorldModelPolicy requires set_env(env) before get_action (it configures the solver)")
-        if self._queue is None or self._pos >= self._queue.shape[1]:
+        if self._queue is None or self._pos >= self._queue.shape[1] or self._env_restarted(info_dict):
             self._replan(info_dict, env)
         action = self._queue[:, self._pos]
         self._pos += 1
         return action
+
+    def _env_restarted(self, info_dict: Mapping[str, Any]) -> bool:
+        """True when an env started a new episode since the last plan (its ``step_idx`` is 0
+        while the queue is part-used): its queued actions belong to the old episode, so
+        every env replans (without warm start)."""
+        if self._pos == 0 or keys.STEP_IDX not in info_dict:
+            return False
+        step = np.asarray(info_dict[keys.STEP_IDX])
+        restarted = bool(np.any(step.reshape(step.shape[0], -1)[:, -1] == 0))
+        if restarted:
+            self._next_init = None
+        return restarted
 
     def _replan(self, info_dict: Mapping[str, Any], env: Any) -> None:
         info = prepare_info(info_dict, self.process, self.transform)

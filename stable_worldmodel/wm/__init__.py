@@ -1,8 +1,59 @@
-"""World models (JEPA-style DINO-WM / PLDM / LeWM, TD-MPC, Dreamer).
+"""World models: one folder per model (light config + torch module + its loss), a registry,
+checkpoints in upstream 0.1.1's ``save_pretrained`` layout.
 
-Not implemented yet: the world-model issue builds them here (one folder per model,
-a light config plus a torch module). Planning already works with any object exposing
-``get_cost(info_dict, candidates) -> (B, S)`` (see :mod:`stable_worldmodel.solver`).
+Importing this package is cheap; torch is imported when a model class is first used.
+
+    >>> import stable_worldmodel as swm
+    >>> swm.wm.list_models()
+    ['dummy', 'lewm', 'pldm']
+    >>> model = swm.wm.make("lewm", preset="tiny", action_dim=2)      # doctest: +SKIP
+
+The contract every model follows (shapes: ``B`` envs, ``S`` candidates, ``T`` history,
+``H`` horizon, ``A`` action block, ``D`` embedding) is written in :mod:`stable_worldmodel.wm.jepa`:
+``encode(info) -> info`` (adds ``emb``, ``act_emb``), ``predict(emb, act_emb) -> emb``,
+``rollout(info, candidates) -> info`` (adds ``predicted_emb``), ``get_cost(info, candidates)
+-> (B, S)`` and ``loss(batch) -> {"loss": ..., named terms}``.
 """
 
-__all__: list[str] = []
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from .._lazy import lazy_getattr
+from ._registry import get_config, get_config_class, list_models, make, register_model
+
+_ATTRS = {
+    "LeWM": ".lewm",
+    "PLDM": ".pldm",
+    "DummyWorldModel": ".dummy",
+    "JEPA": ".jepa",
+    "SIGReg": ".loss",
+    "VCReg": ".loss",
+    "PLDMLoss": ".loss",
+    "TemporalStraighteningLoss": ".loss",
+    "save_pretrained": ".utils",
+    "load_pretrained": ".utils",
+    "instantiate": ".utils",
+    "ConvEncoder": ".encoders",
+    "vit_hf": ".encoders",
+    "LeWMConfig": ".lewm.config",
+    "PLDMConfig": ".pldm.config",
+    "DummyConfig": ".dummy_config",
+}
+
+__all__ = ["get_config", "get_config_class", "list_models", "make", "register_model", *_ATTRS]
+
+__getattr__ = lazy_getattr(__name__, _ATTRS)
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
+
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .dummy import DummyWorldModel  # noqa: F401
+    from .encoders import ConvEncoder, vit_hf  # noqa: F401
+    from .lewm import LeWM  # noqa: F401
+    from .loss import PLDMLoss, SIGReg, TemporalStraighteningLoss, VCReg  # noqa: F401
+    from .pldm import PLDM  # noqa: F401
+    from .utils import instantiate, load_pretrained, save_pretrained  # noqa: F401

@@ -68,8 +68,8 @@ CASES = {
 FACTORS = [(env_id, name) for env_id, case in CASES.items() for name in sorted(case["alternatives"])]
 
 
-def make(env_id: str, size=(64, 64)):
-    env = gym.make(env_id).unwrapped
+def make(env_id: str, size=(64, 64), **kwargs):
+    env = gym.make(env_id, **kwargs).unwrapped
     env.set_render_size(size)
     return env
 
@@ -118,7 +118,9 @@ def test_every_factor_has_a_test_value(env_id):
 
 @pytest.mark.parametrize("env_id,name", FACTORS)
 def test_every_factor_changes_the_episode(env_id, name):
-    env, case = make(env_id), CASES[env_id]
+    # TwoRoom draws the goal disk only with render_target=True (its default hides it)
+    shows_goal = {"render_target": True} if env_id == "swm/TwoRoom-v1" and name.startswith("goal.") else {}
+    env, case = make(env_id, **shows_goal), CASES[env_id]
     frames, states = rollout(env, env_id, options={"variation_values": case["base"]})
     values = {**case["base"], name: case["alternatives"][name]}
     frames2, states2 = rollout(env, env_id, options={"variation_values": values})
@@ -190,3 +192,14 @@ def test_package_exports_lazily_without_cv2(module, names):
         f"assert [getattr(m, n).__name__ for n in {names.split()!r}] == {names.split()!r}"
     )
     subprocess.run([sys.executable, "-c", code], check=True, cwd=Path(__file__).parents[2])
+
+
+def test_two_room_hides_the_goal_and_its_goal_image_is_the_frame_at_the_goal():
+    env = make("swm/TwoRoom-v1")
+    obs, info = env.reset(seed=3)
+    shown = make("swm/TwoRoom-v1", render_target=True)
+    shown.reset(seed=3)
+    assert not np.array_equal(env.render(), shown.render())  # the goal disk is drawn only when asked
+    at_goal = make("swm/TwoRoom-v1")
+    at_goal.reset(seed=3, options={"state": info[keys.GOAL_STATE]})
+    np.testing.assert_array_equal(at_goal.render(), info[keys.GOAL])

@@ -106,7 +106,7 @@ class ToyEnv(DatasetResetMixin, gym.Env):
 
     def _info(self) -> dict[str, Any]:
         if self._goal_img is None:  # the goal image only changes on reset
-            self._goal_img = self._draw(self._goal, show_goal=False)
+            self._goal_img = self._draw(self._goal, show_goal=True)  # what the agent sees at the goal
         return {
             keys.GOAL: self._goal_img.copy(),  # check_env rejects infos that share arrays
             keys.GOAL_STATE: self._goal.copy(),

@@ -20,6 +20,9 @@ split by a vertical wall (centre ``wall.position``, thickness ``wall.thickness``
   Every other factor keeps its default unless named in ``"variation"`` or
   ``"variation_values"``.
 - Restoring a ``"state"`` also restores the geometry it encodes (wall and door factors).
+- The goal disk is not drawn in the frames unless ``render_target=True`` (upstream's default
+  and DINO-WM's: the goal is given only as the goal image, the agent drawn at the goal), so
+  frames show the agent, the walls and the doors only.
 - Drawn directly at ``render_size`` (default 224x224) with anti-aliasing; the static layer
   (background, border, wall, doors) and the goal image are drawn once per reset.
 """
@@ -103,8 +106,8 @@ class TwoRoomEnv(PointEnv):
     success_distance = SUCCESS_DISTANCE
     proprio_dim = 2
 
-    def __init__(self, render_mode: str | None = "rgb_array", render_size: tuple[int, int] = (224, 224)):
-        super().__init__(render_mode, render_size)
+    def __init__(self, render_mode: str | None = "rgb_array", render_size: tuple[int, int] = (224, 224), render_target: bool = False):
+        super().__init__(render_mode, render_size, render_target)
         self.world_size = SIZE
         self.observation_space = gym.spaces.Dict(
             {

@@ -1,0 +1,112 @@
+"""What ``swm eval`` runs: an evaluation on fresh seeded episodes or on held-out dataset
+episodes (upstream's protocol), summarized with a 95% interval and a JSON record of the protocol."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import ConfigError
+from .stats import SuccessSummary
+from .worlds import evaluate_policy, make_policy, make_world, reset_options
+
+__all__ = ["dataset_starts", "evaluate_cli"]
+
+
+def dataset_starts(dataset: Any, episodes: int, goal_offset: int, seed: int, pool: Sequence[int] | None = None) -> tuple[list[int], list[int]]:
+    """``episodes`` (episode, start step) pairs with ``start + goal_offset < length``, drawn with
+    ``seed`` from ``pool`` (default: every episode), without repeating a pair while possible."""
+    lengths = np.asarray(dataset.lengths)
+    pool = np.asarray(list(pool) if pool is not None else range(len(lengths)), dtype=np.int64)
+    pool = pool[lengths[pool] > goal_offset]
+    if not len(pool):
+        raise ConfigError(
+            f"swm eval --from-dataset requires episodes longer than --goal-offset {goal_offset}, got none "
+            f"(longest: {int(lengths.max()) if len(lengths) else 0} steps); lower --goal-offset"
+        )
+    rng = np.random.default_rng(seed)
+    pairs = [(int(e), s) for e in pool for s in range(int(lengths[e]) - goal_offset)]
+    pick = rng.permutation(len(pairs))
+    if len(pick) < episodes:
+        pick = np.concatenate([pick, rng.integers(0, len(pairs), episodes - len(pick))])
+    chosen = [pairs[i] for i in pick[:episodes]]
+    return [e for e, _ in chosen], [s for _, s in chosen]
+
+
+def _from_dataset(world: Any, name: str, episodes: int, goal_offset: int, budget: int, seed: int, pool: Sequence[int] | None) -> dict:
+    from ..data import HDF5Dataset
+
+    dataset = HDF5Dataset(name, preload=False)
+    eps, starts = dataset_starts(dataset, episodes, goal_offset, seed, pool)
+    n = world.num_envs
+    successes, steps = [], []
+    for i in range(0, episodes, n):
+        chunk_e, chunk_s = eps[i : i + n], starts[i : i + n]
+        pad = n - len(chunk_e)  # the last chunk fills the spare envs with repeats, then drops them
+        out = world.evaluate_from_dataset(dataset, chunk_e + chunk_e[:1] * pad, chunk_s + chunk_s[:1] * pad, goal_offset, budget, save_video=False)
+        successes += list(np.asarray(out["episode_successes"])[: n - pad])
+        steps += list(np.asarray(out["steps_to_success"])[: n - pad])
+    lengths = [s if s >= 0 else budget for s in steps]
+    return {"episode_successes": np.asarray(successes, bool), "episode_lengths": np.asarray(lengths), "episodes_idx": eps, "start_steps": starts}
+
+
+def evaluate_cli(
+    env: str, policy: str, *, episodes: int, seed: int, variation: Sequence[str], num_envs: int, max_steps: int,
+    image_size: int, plan: Any = None, device: str = "auto", from_dataset: str | None = None, goal_offset: int = 25,
+    budget: int = 50, video: Path | None = None,
+) -> tuple[SuccessSummary, str, dict[str, Any]]:
+    """Evaluate ``policy`` and return its summary, a table title and the JSON record."""
+    start = time.perf_counter()
+    record: dict[str, Any] = {"env": env, "policy": policy, "episodes": episodes, "seed": seed, "num_envs": num_envs, "image_size": image_size}
+    limit = budget if from_dataset else max_steps
+    with make_world(env, num_envs=num_envs, image_size=image_size, max_steps=max(limit, budget) if from_dataset else max_steps, seed=seed) as world:
+        if from_dataset:
+            pol = make_policy(policy, env, seed=seed, plan=plan, device=device)
+            world.set_policy(pol)
+            pool = _held_out(policy, from_dataset)
+            results = _from_dataset(world, from_dataset, episodes, goal_offset, budget, seed, pool)
+            title = f"{env}: {episodes} starts from {from_dataset} (goal +{goal_offset} steps, budget {budget})"
+            record.update(protocol="dataset", dataset=from_dataset, goal_offset=goal_offset, budget=budget,
+                          episodes_idx=results["episodes_idx"], start_steps=results["start_steps"], held_out=pool is not None)
+        else:
+            results = evaluate_policy(world, policy, episodes, seed, variation, plan=plan, device=device)
+            title = f"{env}: seeds {seed}..{seed + episodes - 1}, at most {max_steps} steps"
+            record.update(protocol="seeds", seeds=[seed, seed + episodes - 1], max_steps=max_steps, variation=list(variation))
+        if video is not None:
+            paths = world.record_video(video, max_steps=limit, seed=seed, options=reset_options(variation))
+            record["videos"] = [str(p) for p in paths]
+    summary = SuccessSummary.from_results(policy, results)
+    record.update(
+        success_rate=round(100 * summary.rate, 2), ci95=[round(100 * v, 2) for v in summary.interval],
+        successes=summary.successes, mean_length=round(summary.mean_length, 2), seconds=round(time.perf_counter() - start, 1),
+        episode_successes=[bool(v) for v in results["episode_successes"]],
+    )
+    if plan is not None:
+        record["plan"] = plan.as_dict()
+        record["model"] = _model_summary(policy)
+    return summary, title, record
+
+
+def _held_out(policy: str, dataset: str) -> list[int] | None:
+    """The validation episodes of a wm: run trained on ``dataset`` (None: use every episode)."""
+    if not policy.startswith("wm:"):
+        return None
+    from ..wm.utils import read_protocol, resolve_checkpoint
+
+    protocol = read_protocol(resolve_checkpoint(policy[3:]))
+    if protocol.get("dataset") == Path(dataset).stem and protocol.get("val_episodes"):
+        return list(protocol["val_episodes"])
+    return None
+
+
+def _model_summary(policy: str) -> dict[str, Any]:
+    from ..wm.utils import read_protocol, resolve_checkpoint
+
+    weights = resolve_checkpoint(policy[3:])
+    protocol = read_protocol(weights)
+    keep = ("model", "preset", "dataset", "steps", "seed", "frameskip", "history_size", "image_size", "final")
+    return {"checkpoint": str(weights.parent), **{k: protocol[k] for k in keep if k in protocol}}

@@ -1,0 +1,59 @@
+"""``swm train``: train a world model on a recorded dataset (see :func:`stable_worldmodel.train.train`)."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import typer
+
+from .errors import int_in
+from .pipeline import SeedOpt
+
+
+def _float_pos(value: str) -> float:
+    try:
+        number = float(value)
+    except ValueError as exc:
+        raise typer.BadParameter(f"requires a number, got {value!r}") from exc
+    if not number > 0:
+        raise typer.BadParameter(f"requires a number > 0, got {value!r}")
+    return number
+
+
+def train_cmd(
+    model: Annotated[str, typer.Argument(help="World model to train: lewm, pldm or dummy (see `swm list model`).", metavar="MODEL", show_default=False)],
+    dataset: Annotated[str, typer.Option("--dataset", "-d", metavar="NAME", help="Dataset in the cache (see `swm list dataset`).", show_default=False)],
+    preset: Annotated[str, typer.Option("--preset", metavar="PRESET", help="Sizes and recipe: tiny (CPU, minutes), small (GPU), paper (upstream's).")] = "tiny",
+    steps: Annotated[int | None, typer.Option("--steps", parser=int_in(1), metavar="N", help="Optimizer steps (default: the preset's).", show_default=False)] = None,
+    epochs: Annotated[float | None, typer.Option("--epochs", parser=_float_pos, metavar="E", help="Passes over the train samples (instead of --steps).", show_default=False)] = None,
+    batch_size: Annotated[int | None, typer.Option("--batch-size", parser=int_in(1), metavar="B", help="Samples per step (default: the preset's).", show_default=False)] = None,
+    lr: Annotated[float | None, typer.Option("--lr", parser=_float_pos, metavar="LR", help="Peak learning rate (default: the preset's).", show_default=False)] = None,
+    device: Annotated[str, typer.Option("--device", metavar="DEV", help="auto, cpu, cuda, cuda:N or mps.")] = "auto",
+    precision: Annotated[str, typer.Option("--precision", metavar="P", help="32, bf16 or 16 (16 needs CUDA).")] = "32",
+    name: Annotated[str | None, typer.Option("--name", metavar="RUN", help="Run name (default: <dataset>-<model>).", show_default=False)] = None,
+    seed: SeedOpt = 0,
+    resume: Annotated[bool, typer.Option("--resume", help="Continue the run RUN from its last checkpoint.")] = False,
+    frameskip: Annotated[int | None, typer.Option("--frameskip", parser=int_in(1), metavar="K", help="Env steps per model step (the action block).", show_default=False)] = None,
+) -> None:
+    """Train MODEL on a recorded dataset; the checkpoint goes to $STABLEWM_HOME/checkpoints/RUN.
+
+    Example: swm train lewm --dataset tworoom --preset tiny --name tr-lewm
+    """
+    import sys
+
+    from ..train import train
+    from .display import console
+
+    overrides = {"frameskip": frameskip} if frameskip is not None else {}
+    out = console()
+    result = train(
+        model, dataset, preset, steps=steps, epochs=epochs, batch_size=batch_size, lr=lr, device=device,
+        precision=precision, name=name, seed=seed, resume=resume, progress=sys.stderr.isatty(), **overrides,
+    )
+    val = f"{result.val_loss:.4f}" if result.val_loss is not None else "n/a"
+    out.print(
+        f"Trained {model} ({preset}) on {dataset}: {result.steps} steps in {result.seconds:.0f} s "
+        f"({result.samples_per_second:.0f} samples/s), train loss {result.train_loss:.4f}, val loss {val}",
+        soft_wrap=True,
+    )
+    out.print(f"Checkpoint: {result.folder} (plan with: swm eval ENV --policy wm:{result.run}); loss curve: {result.folder / 'loss.png'}", soft_wrap=True)

@@ -1,0 +1,114 @@
+"""A ready-to-run :class:`~stable_worldmodel.policy.WorldModelPolicy` from a trained checkpoint.
+
+``world_model_policy("tr-lewm", solver="cem")`` loads ``checkpoints/tr-lewm`` (weights,
+config and our ``protocol.json``), moves the model to the device, and wires what the run
+recorded: the action normalizer (the solver plans in normalized action-block units), the
+image preprocessing (``pixels`` and ``goal``), and ``action_block = frameskip``.
+Upstream checkpoints (no ``protocol.json``) plan with ``frameskip`` and ``image_*`` given
+as arguments.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass, field
+from typing import Any
+
+from .. import keys
+from ..errors import ConfigError
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["PlanSettings", "world_model_policy"]
+
+SOLVERS = ("cem", "icem", "mppi", "gd", "random")
+
+
+@dataclass(frozen=True)
+class PlanSettings:
+    """How to plan: solver name, horizon (blocks), receding horizon, samples, iterations, seed."""
+
+    solver: str = "cem"
+    horizon: int = 5
+    receding_horizon: int | None = None
+    samples: int = 300
+    iterations: int = 30
+    topk: int | None = None
+    seed: int = 0
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.solver not in SOLVERS:
+            from ..errors import unknown_name
+
+            raise unknown_name("planning solver", self.solver, SOLVERS)
+        for name in ("horizon", "samples", "iterations"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ConfigError(f"PlanSettings requires {name} to be a positive int, got {value!r}")
+        rh = self.receding_horizon
+        if rh is not None and (isinstance(rh, bool) or not isinstance(rh, int) or not 1 <= rh <= self.horizon):
+            raise ConfigError(f"PlanSettings requires 1 <= receding_horizon <= horizon={self.horizon}, got {rh!r}")
+
+    def as_dict(self) -> dict[str, Any]:
+        return {
+            "solver": self.solver, "horizon": self.horizon, "receding_horizon": self.receding_horizon or self.horizon,
+            "samples": self.samples, "iterations": self.iterations, "topk": self.topk, "seed": self.seed, **self.extra,
+        }
+
+
+def _make_solver(model: Any, settings: PlanSettings, device: Any) -> Any:
+    from ..solver import make_solver
+
+    name, common = settings.solver, {"device": device, "seed": settings.seed}
+    if name == "gd":
+        return make_solver("gd", model, n_steps=settings.iterations, num_samples=1, **common)
+    if name == "random":
+        return make_solver("random", model, num_samples=settings.samples, **common)
+    topk = settings.topk or max(1, settings.samples // 10)
+    return make_solver(name, model, num_samples=settings.samples, n_steps=settings.iterations, topk=topk, **common)
+
+
+def world_model_policy(
+    run: str,
+    settings: PlanSettings | None = None,
+    *,
+    device: str = "auto",
+    cache_dir: str | None = None,
+    frameskip: int | None = None,
+) -> tuple[Any, dict[str, Any]]:
+    """``(policy, protocol)`` for checkpoint ``run`` (see the module docstring).
+
+    The World must give the model ``pixels`` and ``goal`` infos with ``history_size`` 1.
+    """
+    import torch
+
+    from ..policy import PlanConfig, WorldModelPolicy
+    from ..train.trainer import resolve_device
+    from ..wm.preprocess import ImageTransform, Normalizer
+    from ..wm.utils import load_checkpoint
+
+    settings = settings or PlanSettings()
+    dev = resolve_device(device)
+    model, protocol = load_checkpoint(run, cache_dir)
+    model = model.to(dev).eval()
+    for p in model.parameters():
+        p.requires_grad_(settings.solver == "gd")
+    block = int(frameskip or protocol.get("frameskip", 1))
+    config = PlanConfig(
+        horizon=settings.horizon, receding_horizon=settings.receding_horizon or settings.horizon,
+        history_len=1, action_block=block, warm_start=True,
+    )
+    process = {}
+    norms = protocol.get("normalizers", {})
+    if keys.ACTION in norms:
+        process[keys.ACTION] = Normalizer.from_dict(norms[keys.ACTION])
+    size = int(protocol.get("image_size", 224))
+    images = ImageTransform(protocol.get("image_mean", (0.485, 0.456, 0.406)), protocol.get("image_std", (0.229, 0.224, 0.225)), size)
+    transform = {keys.PIXELS: images, keys.GOAL: images}
+    solver = _make_solver(model, settings, dev)
+    policy = WorldModelPolicy(solver, config, process=process, transform=transform)
+    protocol = {**protocol, "plan": settings.as_dict(), "device": str(dev), "action_block": block}
+    if dev.type == "cuda":
+        torch.backends.cuda.matmul.allow_tf32 = True
+    return policy, protocol

@@ -1,0 +1,137 @@
+"""Training world models on recorded datasets: ``stable_worldmodel.train.train(...)`` and ``swm train``.
+
+Importing this package is cheap; torch is imported when :func:`train` runs.
+
+    >>> from stable_worldmodel.train import train                      # doctest: +SKIP
+    >>> result = train("lewm", dataset="tworoom", preset="tiny", name="tr-lewm", seed=0)
+    >>> result.folder        # $STABLEWM_HOME/checkpoints/tr-lewm (load_pretrained("tr-lewm"))
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+from ..errors import ConfigError
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .trainer import TrainResult
+
+__all__ = ["train"]
+
+
+def _positive(name: str, value: Any) -> int | None:
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise ConfigError(f"train requires {name} to be a positive int, got {value!r}")
+    return value
+
+
+def train(
+    model: str,
+    dataset: str,
+    preset: str = "tiny",
+    *,
+    steps: int | None = None,
+    epochs: float | None = None,
+    batch_size: int | None = None,
+    lr: float | None = None,
+    device: str = "auto",
+    precision: str = "32",
+    name: str | None = None,
+    seed: int = 0,
+    resume: bool = False,
+    cache_dir: str | None = None,
+    log_every: int = 10,
+    val_every: int | None = None,
+    ckpt_every: int | None = None,
+    progress: bool = True,
+    **overrides: Any,
+) -> TrainResult:
+    """Train world model ``model`` (a name of ``stable_worldmodel.wm.list_models()``) on dataset ``dataset``.
+
+    ``preset`` picks sizes and recipe (``tiny``, ``small``, ``paper``); ``overrides`` set any
+    config field (``frameskip=5``, ``embed_dim=32`` ...). ``steps`` or ``epochs`` (passes over
+    the train samples) bound the run (default: the preset's steps). The model, its config and
+    ``protocol.json`` go to ``<cache>/checkpoints/<name>/`` (default name ``<dataset>-<model>``),
+    with metrics (``metrics.jsonl``, ``metrics.csv``, TensorBoard when installed) and ``loss.png``.
+    ``resume=True`` continues the run of that name from its last checkpoint (same result as
+    an uninterrupted run); otherwise an existing run folder is an error.
+    """
+    import shutil
+
+    import torch
+
+    from ..wm import get_config
+    from ..wm import utils as wmu
+    from .data import TrainData
+    from .run import STATE_NAME, MetricsLog
+    from .trainer import Trainer, resolve_device
+
+    _positive("steps", steps)
+    _positive("batch_size", batch_size)
+    if epochs is not None and not (isinstance(epochs, (int, float)) and epochs > 0):
+        raise ConfigError(f"train requires epochs > 0, got {epochs!r}")
+    if steps is not None and epochs is not None:
+        raise ConfigError("train requires steps or epochs, got both")
+    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
+        raise ConfigError(f"train requires seed to be an int >= 0, got {seed!r}")
+    if batch_size is not None:
+        overrides["batch_size"] = batch_size
+    if lr is not None:
+        overrides["lr"] = lr
+    cfg = get_config(model, preset, **overrides)
+    dev = resolve_device(device)
+    run = name or f"{dataset}-{model}"
+    if not run or "/" in run or "\\" in run or run.startswith("."):
+        raise ConfigError(f"train requires a plain run name (no path), got {run!r}")
+    folder = wmu.checkpoint_root(cache_dir) / run
+    state_path = folder / STATE_NAME
+    if resume and not state_path.is_file():
+        raise FileNotFoundError(f"train(resume=True) requires a previous run with {state_path}, which does not exist")
+    if not resume and folder.exists():
+        raise FileExistsError(f"Run folder {folder} exists: pass resume=True (--resume) to continue it, or another name")
+
+    torch.manual_seed(seed)
+    data = TrainData(dataset, cfg, seed=seed, device=dev, cache_dir=cache_dir)
+    if epochs is not None:
+        steps = max(1, math.ceil(epochs * data.num_train / cfg.batch_size))
+    steps = steps or cfg.steps
+    tree = cfg.target_tree(data.action_dim)
+    torch.manual_seed(seed)
+    net = wmu.instantiate(tree)
+    protocol = {
+        "model": model,
+        "preset": preset,
+        "config": cfg.to_dict(),
+        "seed": seed,
+        "steps": steps,
+        "frameskip": cfg.frameskip,
+        "history_size": cfg.history_size,
+        "num_preds": cfg.num_preds,
+        "image_size": cfg.image_size,
+        "image_mean": list(cfg.image_mean),
+        "image_std": list(cfg.image_std),
+        "precision": precision,
+        **data.protocol(),
+    }
+    val_every = val_every if val_every is not None else max(log_every, steps // 10)
+    ckpt_every = ckpt_every if ckpt_every is not None else max(1, steps // 4)
+    trainer = Trainer(
+        net, data, cfg, folder=folder, run=run, device=dev, precision=precision, seed=seed, steps=steps,
+        log_every=log_every, val_every=val_every, ckpt_every=ckpt_every, progress=progress, config_tree=tree, protocol=protocol,
+    )
+    folder.mkdir(parents=True, exist_ok=True)
+    if resume:
+        state = torch.load(state_path, map_location=dev, weights_only=False)
+        if int(state.get("steps", steps)) != steps:
+            raise ConfigError(f"train(resume=True) requires the same number of steps as the run ({state.get('steps')}), got {steps}")
+        trainer.load_state_dict(state)
+    try:
+        log = MetricsLog(folder, resume_step=trainer.step if resume else None)
+        return trainer.fit(log)
+    except BaseException:
+        if not resume and trainer.step == 0 and not any(folder.glob("*.pt")):
+            shutil.rmtree(folder, ignore_errors=True)  # nothing worth keeping
+        raise

@@ -1,0 +1,103 @@
+"""The run folder of a training run: metrics files, the loss-curve plot, protocol and state files.
+
+    $STABLEWM_HOME/checkpoints/<run>/
+        weights.pt  config.json  protocol.json     the model (loadable with load_pretrained)
+        step_<N>/weights.pt + config.json          periodic checkpoints
+        train_state.ckpt                           optimizer, scheduler, scaler, RNG, step (--resume)
+        metrics.jsonl  metrics.csv  loss.png       what happened
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import logging
+import math
+from pathlib import Path
+from typing import Any
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["MetricsLog", "plot_losses"]
+
+STATE_NAME = "train_state.ckpt"
+
+
+class MetricsLog:
+    """Appends one JSON line per record to ``metrics.jsonl`` and rewrites ``metrics.csv`` on
+    :meth:`close`; mirrors scalars to TensorBoard when it is installed."""
+
+    def __init__(self, folder: Path, resume_step: int | None = None):
+        self.folder = folder
+        self.path = folder / "metrics.jsonl"
+        if resume_step is None:
+            self.path.write_text("")
+        else:  # keep what was logged up to the resumed step
+            kept = [r for r in self.read() if r.get("step", 0) <= resume_step]
+            self.path.write_text("".join(json.dumps(r) + "\n" for r in kept))
+        self._file = self.path.open("a")
+        self._tb = None
+        try:
+            from torch.utils.tensorboard import SummaryWriter
+
+            self._tb = SummaryWriter(log_dir=str(folder / "tensorboard"))
+        except Exception:  # tensorboard is optional: any import or start-up failure means no mirror
+            self._tb = None
+
+    def read(self) -> list[dict[str, Any]]:
+        if not self.path.is_file():
+            return []
+        return [json.loads(line) for line in self.path.read_text().splitlines() if line.strip()]
+
+    def log(self, record: dict[str, Any]) -> None:
+        self._file.write(json.dumps(record) + "\n")
+        self._file.flush()
+        if self._tb is not None:
+            for key, value in record.items():
+                if key != "step" and isinstance(value, (int, float)) and math.isfinite(value):
+                    self._tb.add_scalar(key, value, record.get("step", 0))
+
+    def close(self) -> None:
+        self._file.close()
+        if self._tb is not None:
+            self._tb.close()
+        records = self.read()
+        fields = sorted({k for r in records for k in r}, key=lambda k: (k != "step", k))
+        with (self.folder / "metrics.csv").open("w", newline="") as f:
+            writer = csv.DictWriter(f, fieldnames=fields)
+            writer.writeheader()
+            writer.writerows(records)
+
+
+def plot_losses(records: list[dict[str, Any]], path: Path, title: str) -> Path | None:
+    """Train loss (and its terms) and validation loss against the step, log scale, as a PNG."""
+    train = [r for r in records if "train/loss" in r]
+    if not train:
+        return None
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 3.8), dpi=120)
+    try:
+        steps = [r["step"] for r in train]
+        ax.plot(steps, [r["train/loss"] for r in train], label="train loss", color="#2f7ebc")
+        for key in sorted({k for r in train for k in r if k.startswith("train/") and k.endswith("_loss")}):
+            values = [(r["step"], r[key]) for r in train if key in r and r[key] > 0]
+            if values:
+                ax.plot(*zip(*values), label=key[len("train/") :], linewidth=0.8, alpha=0.7)
+        val = [(r["step"], r["val/loss"]) for r in records if "val/loss" in r]
+        if val:
+            ax.plot(*zip(*val), "o-", label="val loss", color="#c4703a")
+        if all(r["train/loss"] > 0 for r in train):
+            ax.set_yscale("log")
+        ax.set_xlabel("step")
+        ax.set_title(title, fontsize=9)
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+        fig.tight_layout()
+        fig.savefig(path)
+    finally:
+        plt.close(fig)
+    return path

@@ -1,0 +1,244 @@
+"""One training loop for every world model: the model gives ``loss(batch)``, the loop does the rest.
+
+AdamW with per-module parameter groups (no weight decay on biases, norms and embeddings;
+the encoder's learning rate scaled by ``encoder_lr_scale``), linear warmup then cosine
+decay, gradient clipping, autocast (bf16 / fp16 with a grad scaler) where the device
+supports it, validation loss, an embedding-collapse monitor (per-dim std of the
+embeddings), periodic checkpoints plus the last one, and exact resume: model, optimizer,
+scheduler, scaler, every RNG and the step are restored, so a resumed run equals an
+uninterrupted one.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import math
+import random
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from ..errors import ConfigError
+from ..wm import utils as wmu
+from .run import STATE_NAME, MetricsLog, plot_losses
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["TrainResult", "Trainer", "resolve_device"]
+
+PRECISIONS = ("32", "bf16", "16")
+
+
+def resolve_device(device: str | torch.device = "auto") -> torch.device:
+    """``auto`` -> cuda when available, else mps, else cpu; other names are checked."""
+    if str(device) == "auto":
+        if torch.cuda.is_available():
+            return torch.device("cuda")
+        if getattr(torch.backends, "mps", None) is not None and torch.backends.mps.is_available():
+            return torch.device("mps")
+        return torch.device("cpu")
+    try:
+        dev = torch.device(device)
+    except (RuntimeError, TypeError) as exc:
+        raise ConfigError(f"Training requires a device among auto, cpu, cuda, cuda:N, mps, got {device!r}") from exc
+    if dev.type == "cuda" and not torch.cuda.is_available():
+        raise ConfigError(f"Training requires an available device, got {device!r} but torch sees no CUDA GPU; use --device auto or cpu")
+    if dev.type == "mps" and not (getattr(torch.backends, "mps", None) and torch.backends.mps.is_available()):
+        raise ConfigError(f"Training requires an available device, got {device!r} but MPS is not available")
+    return dev
+
+
+def _param_groups(model: torch.nn.Module, lr: float, weight_decay: float, encoder_lr_scale: float) -> list[dict]:
+    """Four groups: (encoder or not) x (decayed matrices or not-decayed vectors)."""
+    groups: dict[tuple[bool, bool], list] = {}
+    for name, p in model.named_parameters():
+        if not p.requires_grad:
+            continue
+        is_encoder = name.startswith("encoder.")
+        decay = p.ndim >= 2 and "pos_embedding" not in name and "position_embeddings" not in name and "cls_token" not in name
+        groups.setdefault((is_encoder, decay), []).append(p)
+    return [
+        {"params": ps, "lr": lr * (encoder_lr_scale if enc else 1.0), "weight_decay": weight_decay if decay else 0.0, "name": f"{'encoder' if enc else 'model'}/{'decay' if decay else 'no_decay'}"}
+        for (enc, decay), ps in sorted(groups.items())
+    ]
+
+
+def _schedule(warmup: int, total: int):
+    def factor(step: int) -> float:
+        if warmup and step < warmup:
+            return (step + 1) / warmup
+        progress = (step - warmup) / max(1, total - warmup)
+        return 0.5 * (1.0 + math.cos(math.pi * min(1.0, progress)))
+
+    return factor
+
+
+@dataclass
+class TrainResult:
+    """What :func:`stable_worldmodel.train.train` returns."""
+
+    run: str
+    folder: Path
+    steps: int
+    train_loss: float
+    val_loss: float | None
+    seconds: float
+    samples_per_second: float
+    history: list[dict[str, Any]] = field(default_factory=list)
+
+
+class Trainer:
+    """Trains ``model`` on ``data`` (:class:`~stable_worldmodel.train.data.TrainData`) into ``folder``."""
+
+    def __init__(self, model: torch.nn.Module, data: Any, cfg: Any, *, folder: Path, run: str, device: torch.device,
+                 precision: str = "32", seed: int = 0, steps: int, log_every: int = 10, val_every: int = 0,
+                 ckpt_every: int = 0, val_samples: int = 512, progress: bool = True, config_tree: dict, protocol: dict):
+        if precision not in PRECISIONS:
+            raise ConfigError(f"Training requires precision in {PRECISIONS}, got {precision!r}")
+        if precision == "16" and device.type != "cuda":
+            raise ConfigError(f"Training requires a CUDA device for precision 16, got {device}; use bf16 or 32")
+        self.model, self.data, self.cfg = model.to(device), data, cfg
+        self.folder, self.run, self.device, self.precision, self.seed = folder, run, device, precision, seed
+        self.steps, self.log_every, self.val_every, self.ckpt_every = steps, log_every, val_every, ckpt_every
+        self.val_samples, self.progress = val_samples, progress
+        self.config_tree, self.protocol = config_tree, protocol
+        self.optimizer = torch.optim.AdamW(_param_groups(model, cfg.lr, cfg.weight_decay, cfg.encoder_lr_scale), lr=cfg.lr)
+        self.scheduler = torch.optim.lr_scheduler.LambdaLR(self.optimizer, _schedule(cfg.warmup_steps, steps))
+        self.scaler = torch.amp.GradScaler(device.type, enabled=precision == "16")
+        self.generator = torch.Generator().manual_seed(seed)
+        self.step = 0
+        self._collapse_warned = False
+
+    # -- state -------------------------------------------------------------------------------
+    def state_dict(self) -> dict[str, Any]:
+        return {
+            "model": self.model.state_dict(),
+            "optimizer": self.optimizer.state_dict(),
+            "scheduler": self.scheduler.state_dict(),
+            "scaler": self.scaler.state_dict(),
+            "step": self.step,
+            "rng": {
+                "torch": torch.get_rng_state(),
+                "cuda": torch.cuda.get_rng_state_all() if torch.cuda.is_available() else [],
+                "numpy": np.random.get_state(),
+                "python": random.getstate(),
+                "batches": self.generator.get_state(),
+            },
+            "steps": self.steps,
+        }
+
+    def load_state_dict(self, state: dict[str, Any]) -> None:
+        self.model.load_state_dict(state["model"])
+        self.optimizer.load_state_dict(state["optimizer"])
+        self.scheduler.load_state_dict(state["scheduler"])
+        self.scaler.load_state_dict(state["scaler"])
+        self.step = int(state["step"])
+        rng = state["rng"]
+        torch.set_rng_state(rng["torch"])
+        if rng["cuda"] and torch.cuda.is_available():
+            torch.cuda.set_rng_state_all(rng["cuda"])
+        np.random.set_state(rng["numpy"])
+        random.setstate(rng["python"])
+        self.generator.set_state(rng["batches"])
+
+    def save(self, final: bool = False) -> None:
+        """Write the model (run folder and ``step_<N>/``) and the training state."""
+        protocol = {**self.protocol, "steps_done": self.step}
+        for where in ([self.folder] + ([self.folder / f"step_{self.step:06d}"] if not final else [])):
+            where.mkdir(parents=True, exist_ok=True)
+            wmu.write_checkpoint(self.model, where, self.config_tree, protocol)
+        wmu._atomic_write(self.folder / STATE_NAME, lambda p: torch.save(self.state_dict(), p))
+
+    # -- loop --------------------------------------------------------------------------------
+    def _autocast(self):
+        if self.precision == "32":
+            return contextlib.nullcontext()
+        dtype = torch.bfloat16 if self.precision == "bf16" else torch.float16
+        return torch.autocast(self.device.type, dtype=dtype)
+
+    def _monitor(self, emb: torch.Tensor) -> dict[str, float]:
+        std = emb.detach().float().reshape(-1, emb.shape[-1]).std(dim=0)
+        out = {"emb_std_mean": float(std.mean()), "emb_std_min": float(std.min())}
+        if out["emb_std_mean"] < 1e-3 and not self._collapse_warned:
+            logger.warning("embedding collapse at step %d: mean per-dim std %.2e", self.step, out["emb_std_mean"])
+            self._collapse_warned = True
+        return out
+
+    def validate(self) -> float | None:
+        batches = self.data.val_batches(self.cfg.batch_size, self.val_samples)
+        if not batches:
+            return None
+        was_training = self.model.training
+        self.model.eval()
+        total, count = 0.0, 0
+        with torch.no_grad(), self._autocast():
+            for index in batches:
+                out = self.model.loss(self.data.batch(index))
+                total += float(out["loss"]) * len(index)
+                count += len(index)
+        self.model.train(was_training)
+        return total / count
+
+    def fit(self, log: MetricsLog) -> TrainResult:
+        from tqdm.auto import tqdm
+
+        bs = self.cfg.batch_size
+        self.model.train()
+        start, start_step = time.perf_counter(), self.step
+        last_loss, val_loss = float("nan"), None
+        bar = tqdm(total=self.steps, initial=self.step, desc=f"train {self.run}", unit="step", disable=not self.progress, dynamic_ncols=True)
+        window: list[float] = []
+        try:
+            while self.step < self.steps:
+                batch = self.data.train_batch(self.generator, bs)
+                with self._autocast():
+                    out = self.model.loss(batch)
+                loss = out["loss"]
+                if not torch.isfinite(loss):
+                    raise FloatingPointError(f"Training diverged: loss is {float(loss)} at step {self.step}; lower --lr or use --precision 32")
+                self.optimizer.zero_grad(set_to_none=True)
+                self.scaler.scale(loss).backward()
+                if self.cfg.grad_clip:
+                    self.scaler.unscale_(self.optimizer)
+                    torch.nn.utils.clip_grad_norm_(self.model.parameters(), self.cfg.grad_clip)
+                self.scaler.step(self.optimizer)
+                self.scaler.update()
+                self.scheduler.step()
+                self.step += 1
+                window.append(float(loss.detach()))
+                bar.update(1)
+                if self.step % self.log_every == 0 or self.step == self.steps:
+                    last_loss = sum(window) / len(window)
+                    window.clear()
+                    rate = (self.step - start_step) * bs / max(time.perf_counter() - start, 1e-9)
+                    record = {"step": self.step, "train/loss": last_loss, "lr": self.scheduler.get_last_lr()[0], "samples_per_s": rate}
+                    record.update({f"train/{k}": float(v.detach()) for k, v in out.items() if k != "loss" and torch.is_tensor(v) and v.ndim == 0})
+                    if "emb" in out:
+                        record.update(self._monitor(out["emb"]))
+                    if self.val_every and (self.step % self.val_every == 0 or self.step == self.steps):
+                        val_loss = self.validate()
+                        if val_loss is not None:
+                            record["val/loss"] = val_loss
+                    log.log(record)
+                    bar.set_postfix(loss=f"{last_loss:.4f}", samples_s=f"{rate:.0f}")
+                if self.ckpt_every and self.step % self.ckpt_every == 0 and self.step < self.steps:
+                    self.save()
+        finally:
+            bar.close()
+        if val_loss is None or not self.val_every:
+            val_loss = self.validate()
+            if val_loss is not None:
+                log.log({"step": self.step, "val/loss": val_loss})
+        seconds = time.perf_counter() - start
+        self.protocol["final"] = {"train_loss": last_loss, "val_loss": val_loss}
+        self.save(final=True)
+        log.close()
+        records = log.read()
+        plot_losses(records, self.folder / "loss.png", f"{self.run}: {self.protocol.get('model')} on {self.protocol.get('dataset')}")
+        rate = (self.step - start_step) * bs / max(seconds, 1e-9)
+        return TrainResult(self.run, self.folder, self.step, last_loss, val_loss, seconds, rate, records)

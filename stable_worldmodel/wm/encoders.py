@@ -1,0 +1,109 @@
+"""Image encoders with the interface the JEPA models call:
+``encoder(pixels (N, C, h, w), interpolate_pos_encoding=...) -> out.last_hidden_state (N, L, D)``.
+
+- :func:`vit_hf`: the Hugging Face ``transformers.ViTModel`` (no pooler) that upstream's
+  configs build through ``stable_pretraining.backbone.utils.vit_hf``; same sizes, same
+  parameter names, so upstream checkpoints load. ``transformers`` is imported on call.
+- :class:`ConvEncoder`: a small strided CNN for CPU presets (one token, ``L = 1``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from types import SimpleNamespace
+from typing import Any
+
+import torch
+from torch import nn
+
+from .._optional import require
+from ..errors import ConfigError, SpaceError, did_you_mean
+
+__all__ = ["VIT_SIZES", "ConvEncoder", "EncoderOutput", "vit_hf"]
+
+#: ViT sizes of ``vit_hf`` (the MLP width is 4x the hidden size)
+VIT_SIZES = {
+    "tiny": {"hidden_size": 192, "num_hidden_layers": 12, "num_attention_heads": 3},
+    "small": {"hidden_size": 384, "num_hidden_layers": 12, "num_attention_heads": 6},
+    "base": {"hidden_size": 768, "num_hidden_layers": 12, "num_attention_heads": 12},
+    "large": {"hidden_size": 1024, "num_hidden_layers": 24, "num_attention_heads": 16},
+    "huge": {"hidden_size": 1280, "num_hidden_layers": 32, "num_attention_heads": 16},
+}
+
+
+def vit_hf(
+    size: str = "tiny",
+    patch_size: int = 16,
+    image_size: int = 224,
+    pretrained: bool = False,
+    use_mask_token: bool = True,
+    **vit_config_overrides: Any,
+) -> nn.Module:
+    """A ``transformers.ViTModel(ViTConfig(...), add_pooling_layer=False)`` of ``size``.
+
+    ``vit_config_overrides`` go into the ``ViTConfig`` (e.g. ``num_hidden_layers=2`` for a
+    tiny test model); ``interpolate_pos_encoding`` is enabled so other image sizes work.
+    ``pretrained=True`` is refused: nothing is downloaded; build with ``pretrained=False``
+    and load weights with :func:`stable_worldmodel.wm.utils.load_pretrained`.
+    """
+    if size not in VIT_SIZES:
+        raise ConfigError(f"vit_hf requires size in {sorted(VIT_SIZES)}, got {size!r}.{did_you_mean(size, VIT_SIZES)}")
+    if pretrained:
+        raise ConfigError(
+            "vit_hf(pretrained=True) would download ImageNet weights, which stable-worldmodel never does; "
+            "use pretrained=False and load a checkpoint (weights.pt + config.json) from $STABLEWM_HOME/checkpoints"
+        )
+    transformers = require("transformers", extra="vit", purpose="ViT encoders")
+    params: dict[str, Any] = dict(VIT_SIZES[size])
+    params["intermediate_size"] = 4 * params["hidden_size"]
+    params.update(image_size=int(image_size), patch_size=int(patch_size))
+    params.update(vit_config_overrides)
+    model = transformers.ViTModel(transformers.ViTConfig(**params), add_pooling_layer=False, use_mask_token=use_mask_token)
+    model.config.interpolate_pos_encoding = True
+    return model
+
+
+@dataclass
+class EncoderOutput:
+    """What :class:`ConvEncoder` returns: ``last_hidden_state (N, 1, D)`` like a ViT's."""
+
+    last_hidden_state: torch.Tensor
+
+    def __getitem__(self, key: str) -> torch.Tensor:
+        return getattr(self, key)
+
+
+class ConvEncoder(nn.Module):
+    """Strided CNN: ``(N, in_channels, image_size, image_size) -> last_hidden_state (N, 1, hidden_size)``.
+
+    Each stage is a 4x4 stride-2 conv + GroupNorm + GELU (channels ``width * 2**i``, capped
+    at ``8 * width``) until the map is at most 4x4, then flatten and a linear layer.
+    ``config.hidden_size`` / ``config.image_size`` mirror a ViT's config.
+    """
+
+    def __init__(self, image_size: int = 64, in_channels: int = 3, width: int = 16, hidden_size: int = 64):
+        super().__init__()
+        for name, value in (("image_size", image_size), ("in_channels", in_channels), ("width", width), ("hidden_size", hidden_size)):
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ConfigError(f"ConvEncoder requires {name} to be a positive int, got {value!r}")
+        if image_size < 8:
+            raise ConfigError(f"ConvEncoder requires image_size >= 8, got {image_size}")
+        self.config = SimpleNamespace(image_size=image_size, hidden_size=hidden_size, num_channels=in_channels, width=width)
+        layers: list[nn.Module] = []
+        channels, side, i = in_channels, image_size, 0
+        while side > 4:
+            out = width * min(2**i, 8)
+            layers += [nn.Conv2d(channels, out, 4, stride=2, padding=1), nn.GroupNorm(max(1, out // 8), out), nn.GELU()]
+            channels, side, i = out, side // 2, i + 1
+        self.convs = nn.Sequential(*layers)
+        self.head = nn.Linear(channels * side * side, hidden_size)
+
+    def forward(self, pixels: torch.Tensor, interpolate_pos_encoding: bool = False, **kwargs: Any) -> EncoderOutput:
+        size = self.config.image_size
+        if pixels.ndim != 4 or pixels.shape[1] != self.config.num_channels or tuple(pixels.shape[-2:]) != (size, size):
+            raise SpaceError(
+                f"ConvEncoder requires images of shape (N, {self.config.num_channels}, {size}, {size}), "
+                f"got {tuple(pixels.shape)}; resize them to {size}x{size} (the model's image_size)"
+            )
+        feat = self.convs(pixels.to(self.head.weight.dtype))
+        return EncoderOutput(self.head(feat.flatten(1)).unsqueeze(1))

@@ -1,0 +1,186 @@
+"""The shared body of the JEPA world models (LeWM, PLDM): encode, predict, rollout, cost.
+
+Contract (every world model of :mod:`stable_worldmodel.wm` follows it; shapes use the
+legend ``B`` envs/batch, ``S`` candidates, ``T`` history frames, ``H`` horizon, ``A``
+action dim (an action *block*: ``frameskip`` env actions concatenated), ``D`` embedding,
+``C, h, w`` image)::
+
+    encode(info)               -> info + emb (B, T, D) [+ act_emb (B, T, D) when info has action]
+    predict(emb, act_emb)      -> (B, T, D), output t predicts frame t + 1
+    rollout(info, candidates)  -> info + predicted_emb (B, S, T + H - T' , D)   (see rollout)
+    get_cost(info, candidates) -> (B, S), lower is better
+    loss(batch)                -> {"loss": scalar, named terms...}
+
+``info["pixels"]`` / ``info["goal"]`` hold preprocessed float images ``(B, T, C, h, w)``
+(``(B, S, T, C, h, w)`` inside a solver, which expands each env's info over its
+candidates). The context and the goal are encoded once per plan: :meth:`JEPA.get_cost`
+stores ``emb`` and ``goal_emb`` in the info dict it is given and reuses them on the next
+call with the same dict (a solver keeps one dict per plan).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import torch
+from torch import nn
+
+from .. import keys
+from ..errors import ConfigError, UnknownNameError
+
+__all__ = ["JEPA", "EMB", "ACT_EMB", "GOAL_EMB", "PREDICTED_EMB"]
+
+EMB, ACT_EMB, GOAL_EMB, PREDICTED_EMB = "emb", "act_emb", "goal_emb", "predicted_emb"
+
+
+def _require(info: dict, key: str, who: str) -> Any:
+    if key not in info:
+        raise UnknownNameError(f"{who} requires info[{key!r}], got keys {sorted(info)}")
+    return info[key]
+
+
+class JEPA(nn.Module):
+    """Encoder + action encoder + autoregressive predictor in a joint embedding space.
+
+    Submodule names are upstream's (``encoder``, ``predictor``, ``action_encoder``,
+    ``projector``, ``pred_proj``), so their ``state_dict`` keys match. The encoder is called
+    as ``encoder(pixels, interpolate_pos_encoding=True)`` and its ``last_hidden_state[:, 0]``
+    (the CLS token of a ViT; the only token of :class:`~stable_worldmodel.wm.encoders.ConvEncoder`)
+    goes through ``projector``.
+    """
+
+    def __init__(
+        self,
+        encoder: nn.Module,
+        predictor: nn.Module,
+        action_encoder: nn.Module,
+        projector: nn.Module | None = None,
+        pred_proj: nn.Module | None = None,
+        **kwargs: Any,
+    ):
+        super().__init__()
+        self.encoder = encoder
+        self.predictor = predictor
+        self.action_encoder = action_encoder
+        self.projector = projector or nn.Identity()
+        self.pred_proj = pred_proj or nn.Identity()
+        self.extra_config = dict(kwargs)
+
+    # -- sizes --------------------------------------------------------------------------------
+    @property
+    def history_size(self) -> int:
+        """Frames the predictor attends to (``predictor.num_frames``, default 3)."""
+        return int(getattr(self.predictor, "num_frames", 3))
+
+    def _dtype(self) -> torch.dtype:
+        for p in self.encoder.parameters():
+            return p.dtype
+        return torch.float32
+
+    # -- verbs --------------------------------------------------------------------------------
+    def encode_pixels(self, pixels: torch.Tensor) -> torch.Tensor:
+        """``(..., C, h, w)`` float images -> ``(..., D)`` embeddings."""
+        lead = pixels.shape[:-3]
+        flat = pixels.reshape(-1, *pixels.shape[-3:]).to(self._dtype())
+        out = self.encoder(flat, interpolate_pos_encoding=True)
+        hidden = out.last_hidden_state if hasattr(out, "last_hidden_state") else out["last_hidden_state"]
+        return self.projector(hidden[:, 0]).reshape(*lead, -1)
+
+    def encode(self, info: dict) -> dict:
+        """Add ``emb: (B, T, D)`` from ``pixels: (B, T, C, h, w)``, and ``act_emb: (B, T, D)``
+        from ``action: (B, T, A)`` when present. Returns the same dict."""
+        info[EMB] = self.encode_pixels(_require(info, keys.PIXELS, f"{type(self).__name__}.encode"))
+        if keys.ACTION in info:
+            info[ACT_EMB] = self.action_encoder(info[keys.ACTION])
+        return info
+
+    def predict(self, emb: torch.Tensor, act_emb: torch.Tensor) -> torch.Tensor:
+        """``emb, act_emb: (B, T, D)`` -> predicted next embeddings ``(B, T, D)``."""
+        preds = self.predictor(emb, act_emb)
+        b, t, d = preds.shape
+        return self.pred_proj(preds.reshape(b * t, d)).reshape(b, t, -1)
+
+    def _predict_last(self, emb: torch.Tensor, act_emb: torch.Tensor) -> torch.Tensor:
+        """Only the last output of :meth:`predict`: ``(N, D)`` (pred_proj acts per token)."""
+        return self.pred_proj(self.predictor(emb, act_emb)[:, -1])
+
+    # -- planning -------------------------------------------------------------------------------
+    def _context(self, info: dict, key: str, cache: str, b: int, s: int | None) -> torch.Tensor:
+        """Embeddings ``(B, T, D)`` of ``info[key]`` (one copy per env), cached in ``info[cache]``."""
+        if cache in info:
+            emb = info[cache]
+            return emb[:, 0] if s is not None and emb.ndim == 4 else emb
+        images = _require(info, key, f"{type(self).__name__}.get_cost")
+        if s is not None:
+            images = images[:, 0]  # the S copies of an env's info are views of one tensor
+        emb = self.encode_pixels(images)
+        info[cache] = emb.unsqueeze(1).expand(b, s, *emb.shape[1:]) if s is not None else emb
+        return emb
+
+    def rollout(self, info: dict, action_sequence: torch.Tensor, history_size: int | None = None) -> dict:
+        """Roll the predictor out over candidate action blocks.
+
+        ``info["pixels"]: (B, S, T, C, h, w)`` (or ``info["emb"]`` already there) and
+        ``action_sequence: (B, S, H, A)`` with ``H >= T``: as in upstream, the first T
+        actions pair with the T context frames and the rest are future actions; the
+        predictor sees at most ``history_size`` frames (default ``predictor.num_frames``).
+        Adds ``predicted_emb: (B, S, H + 1, D)``: the T context embeddings followed by
+        ``H - T + 1`` predictions (the last one after all H actions). 3-D inputs
+        ``(B, H, A)`` with ``(B, T, ...)`` infos work too (no S axis).
+        """
+        squeeze = action_sequence.ndim == 3
+        cand = action_sequence.unsqueeze(1) if squeeze else action_sequence
+        b, s, h, _ = cand.shape
+        ctx = self._context(info, keys.PIXELS, EMB, b, None if squeeze else s)  # (B, T, D)
+        t = ctx.shape[1]
+        if h < t:
+            raise ConfigError(f"{type(self).__name__}.rollout requires at least {t} actions (one per context frame), got {h}")
+        hs = int(history_size or self.history_size)
+        n = b * s
+        act_emb = self.action_encoder(cand.reshape(n, h, -1))  # (BS, H, D)
+        d = ctx.shape[-1]
+        out = ctx.new_empty(n, h + 1, d)
+        out[:, :t] = ctx.unsqueeze(1).expand(b, s, t, d).reshape(n, t, d)
+        for k in range(t, h + 1):
+            lo = max(0, k - hs)
+            out[:, k] = self._predict_last(out[:, lo:k], act_emb[:, lo:k])
+        info[PREDICTED_EMB] = out.reshape(b, h + 1, d) if squeeze else out.reshape(b, s, h + 1, d)
+        return info
+
+    def criterion(self, info: dict) -> torch.Tensor:
+        """Squared distance between the last predicted embedding and the last goal embedding: ``(B, S)``."""
+        pred = info[PREDICTED_EMB][..., -1, :]  # (B, S, D)
+        goal = info[GOAL_EMB]
+        goal = goal[:, :, -1] if goal.ndim == 4 else goal[:, -1].unsqueeze(1)  # (B, S or 1, D)
+        return (pred - goal).square().sum(-1)
+
+    def get_cost(self, info: dict, action_candidates: torch.Tensor) -> torch.Tensor:
+        """Cost of ``action_candidates: (B, S, H, A)`` (normalized action blocks) to reach ``info["goal"]``: ``(B, S)``."""
+        b, s = action_candidates.shape[:2]
+        self._context(info, keys.GOAL, GOAL_EMB, b, s)
+        self.rollout(info, action_candidates)
+        return self.criterion(info)
+
+    # -- training -------------------------------------------------------------------------------
+    def _teacher_forcing(self, batch: dict, history: int | None, num_preds: int) -> tuple[dict, torch.Tensor]:
+        """Encode ``batch`` (``pixels (B, T, C, h, w)``, ``action (B, T, A)``) and predict the
+        frames ``num_preds`` ahead of the first ``history`` ones; returns (encoded, pred_loss)."""
+        pixels = _require(batch, keys.PIXELS, f"{type(self).__name__}.loss")
+        action = torch.nan_to_num(_require(batch, keys.ACTION, f"{type(self).__name__}.loss"), 0.0)
+        total = pixels.shape[1]
+        history = int(history or min(self.history_size, total - num_preds))
+        if history < 1 or history + num_preds > total:
+            raise ConfigError(
+                f"{type(self).__name__}.loss requires history + num_preds <= frames per sample, got history={history}, "
+                f"num_preds={num_preds} and {total} frames"
+            )
+        out = self.encode({keys.PIXELS: pixels, keys.ACTION: action})
+        emb, act_emb = out[EMB], out[ACT_EMB]
+        pred = self.predict(emb[:, :history], act_emb[:, :history])
+        target = emb[:, num_preds : num_preds + history]
+        out["pred_loss"] = (pred - target).square().mean()
+        out[keys.ACTION] = action
+        return out, out["pred_loss"]
+
+    def loss(self, batch: dict) -> dict:  # pragma: no cover - abstract
+        raise NotImplementedError("loss(batch) -> {'loss': scalar, ...named terms}")

@@ -1,0 +1,47 @@
+"""PLDM's light config and presets (no torch import)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+from ..config import IMAGENET_MEAN, IMAGENET_STD, JEPAConfig
+
+__all__ = ["PLDMConfig"]
+
+
+@dataclass
+class PLDMConfig(JEPAConfig):
+    """:class:`~stable_worldmodel.wm.config.JEPAConfig` plus ``idm_hidden`` (width of the
+    inverse dynamics MLP, 0 for none) and ``loss_weights`` (see
+    :data:`stable_worldmodel.wm.pldm.pldm.DEFAULT_LOSS_WEIGHTS`). Presets as LeWM's."""
+
+    model_name: ClassVar[str] = "pldm"
+    target: ClassVar[str] = "stable_worldmodel.wm.pldm.PLDM"
+    presets: ClassVar[dict[str, dict[str, Any]]] = {
+        "tiny": {},
+        "small": {
+            "encoder": "vit", "vit_size": "tiny", "patch_size": 8, "vit_overrides": {"num_hidden_layers": 6},
+            "embed_dim": 192, "depth": 4, "heads": 8, "dim_head": 32, "mlp_dim": 768, "projector_hidden": 1024,
+            "image_mean": IMAGENET_MEAN, "image_std": IMAGENET_STD, "batch_size": 128, "lr": 3e-4, "steps": 20000,
+            "idm_hidden": 512,
+        },
+        "paper": {
+            "encoder": "vit", "vit_size": "tiny", "patch_size": 14, "image_size": 224, "embed_dim": 192,
+            "depth": 6, "heads": 16, "dim_head": 64, "mlp_dim": 2048, "dropout": 0.1, "projector_hidden": 2048,
+            "image_mean": IMAGENET_MEAN, "image_std": IMAGENET_STD, "batch_size": 128, "lr": 5e-5,
+            "warmup_steps": 1000, "steps": 100000, "idm_hidden": 512,
+        },
+    }
+
+    idm_hidden: int = 128
+    loss_weights: dict[str, float] = field(default_factory=dict)
+
+    def target_tree(self, action_dim: int) -> dict[str, Any]:
+        tree = super().target_tree(action_dim)
+        if self.idm_hidden:
+            tree["idm"] = self._mlp(2 * self.embed_dim, self.frameskip * int(action_dim), self.idm_hidden, batchnorm=False)
+        return tree
+
+    def model_kwargs(self, action_dim: int) -> dict[str, Any]:
+        return {**super().model_kwargs(action_dim), "loss_weights": dict(self.loss_weights)}

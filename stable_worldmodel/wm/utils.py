@@ -1,0 +1,341 @@
+"""Checkpoints in upstream 0.1.1's ``save_pretrained`` layout, loaded without hydra::
+
+    $STABLEWM_HOME/checkpoints/<run>/
+        weights.pt      the model's state_dict (torch.save; loaded with weights_only=True)
+        config.json     the model as a ``_target_`` tree (hydra's instantiate format)
+        protocol.json   ours only: what planning needs (normalizers, action block, image
+                        preprocessing, dataset, split, training recipe)
+
+``load_pretrained(name)`` accepts a ``.pt`` file (``config.json`` beside it), a folder
+holding exactly one ``.pt``, or ``<user>/<repo>``, looked up only in
+``checkpoints/models--<user>--<repo>/`` (nothing is ever downloaded). Relative paths are
+taken under ``checkpoints/``. :func:`instantiate` resolves upstream's ``_target_`` names
+(``stable_worldmodel.wm.lewm.LeWM``, ``stable_pretraining.backbone.utils.vit_hf``, ...)
+to our classes and any other dotted name to an importable callable; ``_partial_`` gives a
+``functools.partial``.
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib
+import json
+import logging
+import os
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from ..errors import ConfigError, UnknownNameError
+
+logger = logging.getLogger(__name__)
+
+__all__ = [
+    "checkpoint_root",
+    "instantiate",
+    "load_checkpoint",
+    "load_pretrained",
+    "read_protocol",
+    "resolve_checkpoint",
+    "save_pretrained",
+    "write_checkpoint",
+]
+
+CONFIG_NAME = "config.json"
+PROTOCOL_NAME = "protocol.json"
+WEIGHTS_NAME = "weights.pt"
+
+#: ``_target_`` names of upstream's configs that live elsewhere here
+TARGET_ALIASES = {
+    "stable_pretraining.backbone.utils.vit_hf": "stable_worldmodel.wm.encoders.vit_hf",
+    "stable_pretraining.backbone.vit_hf": "stable_worldmodel.wm.encoders.vit_hf",
+}
+
+
+def checkpoint_root(cache_dir: str | os.PathLike | None = None) -> Path:
+    """``<cache_dir or $STABLEWM_HOME>/checkpoints`` (not created)."""
+    if cache_dir is None:
+        from ..data import get_cache_dir
+
+        cache_dir = get_cache_dir()
+    return Path(cache_dir).expanduser() / "checkpoints"
+
+
+# -- instantiate ------------------------------------------------------------------------------
+def _locate(target: str) -> Any:
+    """The callable named by a dotted path (``pkg.module.Name`` or ``pkg.module.Class.method``)."""
+    target = TARGET_ALIASES.get(target, target)
+    parts = target.split(".")
+    for cut in range(len(parts) - 1, 0, -1):
+        try:
+            obj = importlib.import_module(".".join(parts[:cut]))
+        except ImportError:
+            continue
+        try:
+            for attr in parts[cut:]:
+                obj = getattr(obj, attr)
+        except AttributeError:
+            break
+        return obj
+    raise UnknownNameError(
+        f"instantiate requires an importable _target_, got {target!r}; "
+        f"known aliases: {', '.join(sorted(TARGET_ALIASES))}"
+    )
+
+
+def instantiate(config: Any) -> Any:
+    """Build objects from a ``_target_`` tree (a subset of hydra's ``instantiate``).
+
+    Dicts with ``_target_`` are called with their other keys (built depth first; keys
+    starting with ``_`` other than ``_args_`` are ignored); ``_partial_: true`` returns a
+    ``functools.partial``; lists and plain dicts are walked.
+    """
+    if isinstance(config, Mapping):
+        if "_target_" not in config:
+            return {k: instantiate(v) for k, v in config.items()}
+        target = config["_target_"]
+        if not isinstance(target, str):
+            raise ConfigError(f"instantiate requires _target_ to be a dotted name, got {target!r}")
+        fn = _locate(target)
+        args = [instantiate(v) for v in config.get("_args_", [])]
+        kwargs = {k: instantiate(v) for k, v in config.items() if not k.startswith("_")}
+        if config.get("_partial_", False):
+            return functools.partial(fn, *args, **kwargs)
+        try:
+            return fn(*args, **kwargs)
+        except TypeError as exc:
+            raise ConfigError(f"instantiate could not call {target} with {sorted(kwargs)}: {exc}") from exc
+    if isinstance(config, (list, tuple)):
+        return [instantiate(v) for v in config]
+    return config
+
+
+# -- save -------------------------------------------------------------------------------------
+def _atomic_write(path: Path, write: Any) -> None:
+    tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+
+
+def _json_ready(config: Any) -> Any:
+    if hasattr(config, "_content") and type(config).__module__.startswith("omegaconf"):
+        from omegaconf import OmegaConf  # an OmegaConf config: resolve it like upstream
+
+        return OmegaConf.to_container(config, resolve=True)
+    return config
+
+
+def _write_json(path: Path, data: Any) -> None:
+    text = json.dumps(data, indent=2, default=lambda o: o.tolist() if hasattr(o, "tolist") else str(o))
+    _atomic_write(path, lambda p: p.write_text(text + "\n"))
+
+
+def write_checkpoint(
+    model: Any, folder: Path, config: Mapping[str, Any] | None, protocol: Mapping[str, Any] | None = None, filename: str = WEIGHTS_NAME
+) -> Path:
+    """Write ``folder/<filename>`` (the state dict), ``config.json`` and ``protocol.json`` (each
+    when given), every file through a temporary name. Returns the weights path."""
+    import torch
+
+    folder.mkdir(parents=True, exist_ok=True)
+    path = folder / filename
+    state = {k: v.detach().cpu() for k, v in model.state_dict().items()}
+    _atomic_write(path, lambda p: torch.save(state, p))
+    if config is not None:
+        _write_json(folder / CONFIG_NAME, _json_ready(config))
+    if protocol is not None:
+        _write_json(folder / PROTOCOL_NAME, dict(protocol))
+    return path
+
+
+def save_pretrained(
+    model: Any,
+    run_name: str,
+    config: Mapping[str, Any] | None = None,
+    config_key: str | None = None,
+    filename: str = WEIGHTS_NAME,
+    cache_dir: str | os.PathLike | None = None,
+) -> Path:
+    """Write ``model.state_dict()`` to ``<cache>/checkpoints/<run_name>/<filename>`` and, when
+    given, ``config`` (or ``config[config_key]``) as ``config.json``. Files are written to
+    a temporary name and renamed, so a crash never leaves half a checkpoint. Returns the
+    weights path."""
+    if not run_name or not isinstance(run_name, str):
+        raise ConfigError(f"save_pretrained requires a run name, got {run_name!r}")
+    folder = checkpoint_root(cache_dir) / run_name
+    path = write_checkpoint(model, folder, None, filename=filename)
+    if config is None:
+        logger.warning("save_pretrained(%r) got no config: load_pretrained will not be able to rebuild the model", run_name)
+        return path
+    config = _json_ready(config)
+    if config_key is not None and config_key in config:
+        config = config[config_key]
+    _write_json(folder / CONFIG_NAME, _json_ready(config))
+    logger.info("model saved to %s", path)
+    return path
+
+
+# -- resolve and load --------------------------------------------------------------------------
+def _where_to_put(repo: str, root: Path) -> str:
+    folder = root / f"models--{repo.replace('/', '--')}"
+    return f"put its {WEIGHTS_NAME} and {CONFIG_NAME} in {folder}/ (nothing is downloaded)"
+
+
+def _folder_weights(folder: Path) -> Path:
+    pts = sorted(folder.glob("*.pt"))
+    if not pts:
+        raise FileNotFoundError(f"load_pretrained requires a .pt file in {folder}, found none")
+    if len(pts) > 1:
+        raise ConfigError(
+            f"load_pretrained requires exactly one .pt file in {folder}, got {len(pts)}: "
+            f"{', '.join(p.name for p in pts)}; pass the file itself, e.g. {folder / pts[0].name}"
+        )
+    return pts[0]
+
+
+def resolve_checkpoint(name: str | os.PathLike, cache_dir: str | os.PathLike | None = None) -> Path:
+    """The weights file of ``name`` (a ``.pt`` file, a folder with one, or ``<user>/<repo>``)."""
+    root = checkpoint_root(cache_dir)
+    path = Path(name).expanduser()
+    local = path if path.is_absolute() else root / path
+    if local.suffix == ".pt":
+        if not local.is_file():
+            raise FileNotFoundError(f"load_pretrained requires an existing checkpoint file, got {local}")
+        return local
+    if local.is_dir():
+        return _folder_weights(local)
+    text = str(name)
+    if text.count("/") == 1 and not path.is_absolute():
+        hub = root / f"models--{text.replace('/', '--')}"
+        if hub.is_dir():
+            return _folder_weights(hub)
+        raise FileNotFoundError(f"Checkpoint {text!r} is not in the local cache: {_where_to_put(text, root)}")
+    from ..errors import did_you_mean
+
+    runs = list_checkpoints(cache_dir)
+    raise FileNotFoundError(
+        f"load_pretrained requires a .pt file, a checkpoint folder or <user>/<repo>, got {text!r} "
+        f"(looked in {local}).{did_you_mean(text, runs)} Checkpoints in {root}: {', '.join(runs) or '(none)'}"
+    )
+
+
+def list_checkpoints(cache_dir: str | os.PathLike | None = None) -> list[str]:
+    """Folders under ``checkpoints/`` that hold a ``config.json`` and a ``.pt`` file."""
+    root = checkpoint_root(cache_dir)
+    if not root.is_dir():
+        return []
+    found = []
+    for cfg in root.rglob(CONFIG_NAME):
+        if any(cfg.parent.glob("*.pt")):
+            found.append(cfg.parent.relative_to(root).as_posix())
+    return sorted(found)
+
+
+def _read_json(path: Path, what: str) -> Any:
+    if not path.is_file():
+        raise FileNotFoundError(f"load_pretrained requires {what} {path}, which does not exist")
+    try:
+        return json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"load_pretrained requires valid JSON in {path}, got a corrupt file ({exc})") from exc
+
+
+def read_protocol(weights: Path) -> dict[str, Any]:
+    """``protocol.json`` beside ``weights`` (empty for upstream checkpoints)."""
+    path = weights.parent / PROTOCOL_NAME
+    return _read_json(path, "the protocol file") if path.is_file() else {}
+
+
+#: ViT layer parameters: (transformers 4.x name, 5.x name) inside ``encoder.layer.<i>.`` / ``layers.<i>.``
+_VIT_RENAMES = [
+    ("attention.attention.query", "attention.q_proj"),
+    ("attention.attention.key", "attention.k_proj"),
+    ("attention.attention.value", "attention.v_proj"),
+    ("attention.output.dense", "attention.o_proj"),
+    ("intermediate.dense", "mlp.fc1"),
+    ("output.dense", "mlp.fc2"),
+    ("layernorm_before", "layernorm_before"),
+    ("layernorm_after", "layernorm_after"),
+]
+
+
+def _vit_rules() -> list[tuple[Any, str]]:
+    import re
+
+    rules = []
+    for old, new in _VIT_RENAMES:
+        rules.append((re.compile(rf"encoder\.layer\.(\d+)\.{re.escape(old)}\."), rf"layers.\1.{new}."))
+        rules.append((re.compile(rf"layers\.(\d+)\.{re.escape(new)}\."), rf"encoder.layer.\1.{old}."))
+    return rules
+
+
+def convert_vit_keys(state: Mapping[str, Any], expected: set[str]) -> dict[str, Any]:
+    """Rename ViT parameters between the transformers 4.x layout (published checkpoints) and
+    the 5.x one, whichever way makes them match ``expected`` (the model's own keys)."""
+    if all(k in expected for k in state):
+        return dict(state)
+    rules = _vit_rules()
+    out = {}
+    for key, value in state.items():
+        if key not in expected:
+            for pattern, repl in rules:
+                cand = pattern.sub(repl, key, count=1)
+                if cand != key and cand in expected:
+                    key = cand
+                    break
+        out[key] = value
+    return out
+
+
+def _apply_overrides(config: dict, extra_args: Mapping[str, Any] | None) -> None:
+    for key, value in (extra_args or {}).items():
+        node = config
+        *parents, leaf = str(key).split(".")
+        for part in parents:
+            child = node.get(part)
+            if not isinstance(child, dict):
+                child = node[part] = {}
+            node = child
+        node[leaf] = value
+
+
+def load_checkpoint(
+    name: str | os.PathLike, cache_dir: str | os.PathLike | None = None, extra_args: Mapping[str, Any] | None = None
+) -> tuple[Any, dict[str, Any]]:
+    """``(model, protocol)``: :func:`load_pretrained` plus the ``protocol.json`` of our runs."""
+    import torch
+
+    weights = resolve_checkpoint(name, cache_dir)
+    config = _read_json(weights.parent / CONFIG_NAME, "the model config")
+    if not isinstance(config, dict) or "_target_" not in config:
+        raise ConfigError(f"load_pretrained requires a config.json with a top-level _target_, got {weights.parent / CONFIG_NAME}")
+    _apply_overrides(config, extra_args)
+    try:
+        state = torch.load(weights, map_location="cpu", weights_only=True)
+    except Exception as exc:  # pickle errors of every kind: name the file
+        raise ConfigError(f"load_pretrained could not read the weights {weights}: {exc}") from exc
+    model = instantiate(config)
+    if not isinstance(state, Mapping):
+        raise ConfigError(f"load_pretrained requires a state_dict in {weights}, got {type(state).__name__}")
+    state = convert_vit_keys(state, set(model.state_dict()))
+    missing, unexpected = model.load_state_dict(state, strict=False)
+    if missing or unexpected:
+        raise ConfigError(
+            f"load_pretrained: the weights {weights} do not fit the model of {CONFIG_NAME}: "
+            f"missing keys {list(missing)[:8]}, unexpected keys {list(unexpected)[:8]}"
+        )
+    model.eval()
+    return model, read_protocol(weights)
+
+
+def load_pretrained(name: str | os.PathLike, cache_dir: str | os.PathLike | None = None, extra_args: Mapping[str, Any] | None = None) -> Any:
+    """Build the model of ``config.json`` and load its weights (see the module docstring).
+
+    ``extra_args`` overrides dotted config keys before building (``{"predictor.dropout": 0}``).
+    The model is returned in eval mode.
+    """
+    return load_checkpoint(name, cache_dir, extra_args)[0]
