@@ -1,16 +1,19 @@
-"""``swm demo`` (what ``make demo`` runs): the whole data-and-evaluation loop on one env.
+"""``swm demo`` (what ``make demo`` runs): the whole collect -> train -> plan loop on one env.
 
 1. record expert episodes into a dataset (in the cache) and show it;
-2. evaluate the random and the expert policy on the same seeds;
-3. write one MP4 rollout of each policy, a PNG bar plot of the success rates with 95%
+2. train a world model on it (tiny LeWM by default: a few minutes on a laptop CPU);
+3. evaluate the random policy, the expert and the learned model planning with CEM on the
+   same seeds;
+4. write one MP4 rollout of each policy, a PNG bar plot of the success rates with 95%
    Wilson intervals and a ``results.json``;
-4. end with one line naming where the outputs are.
+5. end with one line naming where the outputs are.
 """
 
 from __future__ import annotations
 
 import json
 import shutil
+import sys
 import tempfile
 from collections.abc import Sequence
 from pathlib import Path
@@ -62,18 +65,20 @@ def plot_success_rates(summaries: Sequence[SuccessSummary], path: Path, title: s
 VIDEO_MIN_SIZE = 224
 
 
-def _record_rollout(env: str, policy: str, path: Path, seed: int, image_size: int, max_steps: int) -> Path:
-    """One MP4 of ``policy`` on the episode of seed ``seed`` (the first evaluation episode)."""
+def _record_rollout(env: str, policy: str, path: Path, seed: int, image_size: int, max_steps: int, plan=None) -> Path:
+    """One MP4 of ``policy`` on the episode of seed ``seed`` (the first evaluation episode).
+
+    A learned model resizes the frames to its own image size; the video keeps ``image_size``."""
     from .worlds import make_policy, make_world
 
     with tempfile.TemporaryDirectory(dir=path.parent) as tmp, make_world(env, 1, image_size, max_steps, seed=seed, verbose=0) as world:
-        world.set_policy(make_policy(policy, env, seed=seed))
+        world.set_policy(make_policy(policy, env, seed=seed, plan=plan))
         (video,) = world.record_video(tmp, max_steps=max_steps, fps=10, seed=seed)
         shutil.move(str(video), path)
     return path
 
 
-def _write_results(path: Path, env: str, seed: int, summaries: Sequence[SuccessSummary], dataset: Path) -> None:
+def _write_results(path: Path, env: str, seed: int, summaries: Sequence[SuccessSummary], dataset: Path, model: dict | None) -> None:
     record = {
         "env": env,
         "dataset": str(dataset),
@@ -83,21 +88,29 @@ def _write_results(path: Path, env: str, seed: int, summaries: Sequence[SuccessS
             for s in summaries
         },
     }
+    if model is not None:
+        record["model"] = model
     path.write_text(json.dumps(record, indent=2) + "\n")
 
 
 def demo(
     env: Annotated[str, typer.Option("--env", metavar="ENV", help="Environment id (it needs an expert; see `swm envs`).")] = DEFAULT_ENV,
-    episodes: Annotated[int, typer.Option("--episodes", "-n", parser=int_in(1), metavar="N", help="Expert episodes to record.")] = 50,
-    eval_episodes: Annotated[int, typer.Option("--eval-episodes", parser=int_in(1), metavar="N", help="Evaluation episodes per policy.")] = 100,
+    episodes: Annotated[int, typer.Option("--episodes", "-n", parser=int_in(1), metavar="N", help="Expert episodes to record.")] = 300,
+    eval_episodes: Annotated[int, typer.Option("--eval-episodes", parser=int_in(1), metavar="N", help="Evaluation episodes per policy.")] = 50,
     out: Annotated[Path, typer.Option("--out", metavar="DIR", help="Folder for the videos, the plot and results.json.", file_okay=False)] = DEFAULT_OUT,
     seed: SeedOpt = 0,
     image_size: ImageSizeOpt = 64,
     max_steps: MaxStepsOpt = None,
+    model: Annotated[str, typer.Option("--model", metavar="MODEL", help="World model to train (lewm, pldm, dummy); 'none' skips training and planning.")] = "lewm",
+    train_steps: Annotated[int | None, typer.Option("--train-steps", parser=int_in(1), metavar="N", help="Training steps (default: the tiny preset's).", show_default=False)] = None,
+    samples: Annotated[int, typer.Option("--samples", parser=int_in(1), metavar="S", help="CEM candidates per iteration.")] = 300,
+    iterations: Annotated[int, typer.Option("--iterations", parser=int_in(1), metavar="K", help="CEM iterations per plan.")] = 30,
+    num_envs: Annotated[int, typer.Option("--num-envs", parser=int_in(1), metavar="K", help="Environments stepped together.")] = 10,
 ) -> None:
-    """Collect expert data, show it, evaluate random vs expert, and write videos and a plot.
+    """Collect expert data, train a world model on it, evaluate random vs expert vs the model
+    planning with CEM, and write videos, a plot and results.json.
 
-    Example: swm demo --env swm/TwoRoom-v1 --episodes 50 --out demo_outputs
+    Example: swm demo --env swm/TwoRoom-v1 --episodes 300 --out demo_outputs
     """
     from ..data import dataset_info, delete_dataset
     from ..data.utils import resolve_dataset_path
@@ -107,34 +120,61 @@ def demo(
     env = resolve_env(env)
     max_steps = episode_limit(env, max_steps)
     make_policy("expert", env)  # fail now (one line) when the env has no expert
+    learn = model != "none"
+    if learn:
+        from ..wm import list_models
+
+        from .errors import check_choice
+
+        check_choice("world model", model, list_models())
     out.mkdir(parents=True, exist_ok=True)
     con = console()
     name = "demo-" + default_dataset_name(env, "expert")
+    total = 5 if learn else 4
+    step = iter(range(1, total + 1))
 
-    con.rule(f"[1/4] Recording {episodes} expert episodes of {env}")
+    con.rule(f"[{next(step)}/{total}] Recording {episodes} expert episodes of {env}")
     if resolve_dataset_path(name).exists():
         delete_dataset(name)
-    with make_world(env, 1, image_size, max_steps, seed=seed) as world:
+    with make_world(env, min(4, episodes), image_size, max_steps, seed=seed) as world:
         world.set_policy(make_policy("expert", env, seed=seed))
         dataset = world.record_dataset(name, episodes=episodes, seed=seed)
     display_dataset_info(dataset_info(name))
 
+    policies: list[tuple[str, str]] = [(p, p) for p in POLICY_ORDER]
+    plan, model_record = None, None
+    if learn:
+        from ..planning.learned import PlanSettings
+        from ..train import train
+        from ..wm.utils import checkpoint_root
+
+        run = f"demo-{model}"
+        con.rule(f"[{next(step)}/{total}] Training a tiny {model} on {name}")
+        shutil.rmtree(checkpoint_root() / run, ignore_errors=True)
+        result = train(model, name, "tiny", steps=train_steps, name=run, seed=seed, progress=sys.stderr.isatty())
+        con.print(f"{result.steps} steps in {result.seconds:.0f} s ({result.samples_per_second:.0f} samples/s), train loss {result.train_loss:.4f}; checkpoint {result.folder}", soft_wrap=True)
+        plan = PlanSettings(solver="cem", samples=samples, iterations=iterations, seed=seed)
+        policies.append((f"{model}+cem", f"wm:{run}"))
+        model_record = {"run": run, "checkpoint": str(result.folder), "steps": result.steps, "train_seconds": round(result.seconds, 1), "plan": plan.as_dict()}
+
     eval_seed = seed + EVAL_SEED_OFFSET
-    con.rule(f"[2/4] Evaluating {', '.join(POLICY_ORDER)} on the same {eval_episodes} seeds")
+    con.rule(f"[{next(step)}/{total}] Evaluating {', '.join(label for label, _ in policies)} on the same {eval_episodes} seeds")
     summaries = []
-    with make_world(env, 1, image_size, max_steps, seed=eval_seed) as world:
-        for policy in POLICY_ORDER:
-            summaries.append(SuccessSummary.from_results(policy, evaluate_policy(world, policy, eval_episodes, eval_seed)))
+    with make_world(env, min(num_envs, eval_episodes), image_size, max_steps, seed=eval_seed) as world:
+        for label, policy in policies:
+            results = evaluate_policy(world, policy, eval_episodes, eval_seed, plan=plan)
+            summaries.append(SuccessSummary.from_results(label, results))
     con.print(success_table(f"{env}: seeds {eval_seed}..{eval_seed + eval_episodes - 1}, at most {max_steps} steps", summaries))
 
-    con.rule("[3/4] Recording one rollout video per policy")
+    con.rule(f"[{next(step)}/{total}] Recording one rollout video per policy")
     video_size = max(image_size, VIDEO_MIN_SIZE)  # the envs draw at any size: make the videos legible
-    videos = [_record_rollout(env, p, out / f"{p}.mp4", eval_seed, video_size, max_steps) for p in POLICY_ORDER]
+    videos = [_record_rollout(env, p, out / f"{label}.mp4", eval_seed, video_size, max_steps, plan=plan) for label, p in policies]
     con.print("Videos: " + ", ".join(str(v) for v in videos), soft_wrap=True)
 
-    con.rule("[4/4] Plotting success rates with 95% confidence intervals")
+    con.rule(f"[{next(step)}/{total}] Plotting success rates with 95% confidence intervals")
     plot = plot_success_rates(summaries, out / PLOT_NAME, f"{env}, {eval_episodes} episodes per policy (95% Wilson CI)")
-    _write_results(out / RESULTS_NAME, env, eval_seed, summaries, dataset)
+    _write_results(out / RESULTS_NAME, env, eval_seed, summaries, dataset, model_record)
     con.print(f"Plot: {plot}", soft_wrap=True)
     files = ", ".join(p.name for p in (*videos, plot)) + f", {RESULTS_NAME}"
-    typer.echo(f"Demo outputs in {out.resolve()} ({files}); dataset '{name}' at {dataset}")
+    where = f"; checkpoint {model_record['checkpoint']}" if model_record else ""
+    typer.echo(f"Demo outputs in {out.resolve()} ({files}); dataset '{name}' at {dataset}{where}")

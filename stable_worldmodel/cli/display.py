@@ -197,6 +197,50 @@ def display_world_info(info: dict[str, Any]) -> None:
     console().print(Panel(Group(grid, Text(""), tree), title=f"[bold]world[/] {info.get('name', '?')}", expand=False))
 
 
+def human_size(size: int) -> str:
+    """``1536`` -> ``"1.5 KiB"`` (below 1 KiB: ``"512 B"``)."""
+    value, unit = float(size), "B"
+    for unit in ("B", "KiB", "MiB", "GiB"):
+        if value < 1024 or unit == "GiB":
+            break
+        value /= 1024
+    return f"{int(size)} B" if unit == "B" else f"{value:.1f} {unit}"
+
+
+def _count(n: int) -> str:
+    """``1234567`` -> ``"1,234,567 (1.23M)"``."""
+    for scale, suffix in ((1e9, "B"), (1e6, "M"), (1e3, "k")):
+        if n >= scale:
+            return f"{n:,} ({n / scale:.3g}{suffix})"
+    return str(n)
+
+
+def display_model_info(info: dict[str, Any]) -> None:
+    """Print a panel with a cached model's format, path, files and, for checkpoint folders, its
+    ``_target_``, parameter count and training protocol.
+
+    ``info`` has the keys of :func:`stable_worldmodel.cli.resources.checkpoint_info` (``name``,
+    ``format``, ``path``, ``files`` as ``(name, bytes)`` pairs, ``target``, ``parameters``,
+    ``tensors``, ``protocol`` as ``(label, value)`` rows) or of ``pickled_info`` (no model keys).
+    """
+    rows: list[tuple[str, Any]] = [("format", info.get("format")), ("path", Text(str(info.get("path", "-"))))]
+    if "parameters" in info:
+        tensors = info.get("tensors")
+        rows += [("target", info.get("target")), ("parameters", Text(_count(int(info["parameters"])) + (f" in {tensors} tensors" if tensors else "")))]
+    files = Table(title="Files", title_justify="left", box=None, pad_edge=False, show_header=False)
+    files.add_column(style="cyan")
+    files.add_column(justify="right")
+    for name, size in info.get("files") or [("-", None)]:
+        files.add_row(name, "-" if size is None else human_size(size))
+    parts: list[Any] = [_kv_table("Overview", rows), Text(""), files]
+    protocol = info.get("protocol")
+    if protocol:
+        parts += [Text(""), _kv_table("Protocol", protocol)]
+    elif "protocol" in info:
+        parts += [Text(""), Text("no protocol.json", style="dim")]
+    console().print(Panel(Group(*parts), title=f"[bold]model[/] {info.get('name', '?')}", expand=False))
+
+
 def names_table(title: str, names: Sequence[str], note: str | None = None) -> None:
     """Print ``title (count) in note`` and a one-column table of ``names`` (or a note that there are none)."""
     out = console()

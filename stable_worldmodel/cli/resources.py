@@ -1,9 +1,17 @@
-"""Cache commands of seed 000: ``swm list``, ``swm show`` and ``swm delete``."""
+"""Cache commands of seed 000: ``swm list``, ``swm show`` and ``swm delete``.
+
+A model name is either a checkpoint folder under ``<cache>/checkpoints/`` (its path relative
+to that folder; ``weights.pt`` + ``config.json`` [+ ``protocol.json``], see
+:mod:`stable_worldmodel.wm.utils`) or an older pickled checkpoint ``<cache>/<name>_object.ckpt``
+(with its ``<name>_weights*.ckpt``). When both exist under one name, the commands act on both.
+"""
 
 from __future__ import annotations
 
+import json
 from collections.abc import Callable, Sequence
-from typing import Annotated
+from pathlib import Path
+from typing import Annotated, Any
 
 import typer
 
@@ -14,10 +22,142 @@ from .errors import check_choice
 ALIASES = {"models": "model", "datasets": "dataset", "worlds": "world"}
 
 
+#: ``protocol.json`` entries shown by ``swm show model``: (label, key)
+PROTOCOL_ROWS = (
+    ("model", "model"),
+    ("preset", "preset"),
+    ("dataset", "dataset"),
+    ("env", "env"),
+    ("action dim", "action_dim"),
+    ("steps", "steps"),
+    ("steps done", "steps_done"),
+    ("history size", "history_size"),
+    ("frameskip", "frameskip"),
+    ("image size", "image_size"),
+)
+
+
+def _list_models() -> list[str]:
+    """Checkpoint folders (relative to ``checkpoints/``) and pickled checkpoint names, sorted."""
+    from .. import data
+    from ..wm.utils import list_checkpoints
+
+    return sorted(set(data.list_models()) | set(list_checkpoints()))
+
+
 def _lister(kind: str) -> Callable[[], list[str]]:
     from .. import data
 
-    return {"model": data.list_models, "dataset": data.list_datasets, "world": data.list_worlds}[kind]
+    return {"model": _list_models, "dataset": data.list_datasets, "world": data.list_worlds}[kind]
+
+
+# -- models ------------------------------------------------------------------------------------
+def _checkpoint_folder(name: str) -> Path | None:
+    """``checkpoints/<name>`` when it is a checkpoint folder (as listed by ``list_checkpoints``)."""
+    from ..wm.utils import checkpoint_root, list_checkpoints
+
+    return checkpoint_root() / name if name in list_checkpoints() else None
+
+
+def _pickled_files(name: str) -> list[Path]:
+    """The ``<name>_object.ckpt`` / ``<name>_weights*.ckpt`` files of an older checkpoint."""
+    from ..data.info import _model_files  # the one place that knows the older file names
+
+    return sorted(_model_files().get(name, []))
+
+
+def _entry_size(path: Path) -> int:
+    if path.is_file():
+        return path.stat().st_size
+    return sum(p.stat().st_size for p in path.rglob("*") if p.is_file())
+
+
+def _count_parameters(weights: Path) -> tuple[int, int]:
+    """``(elements, tensors)`` of the state_dict in ``weights``, read without building the model."""
+    import torch
+
+    try:
+        try:
+            state = torch.load(weights, map_location="cpu", weights_only=True, mmap=True)
+        except RuntimeError:  # a legacy (non-zip) file cannot be memory-mapped: read it whole
+            state = torch.load(weights, map_location="cpu", weights_only=True)
+    except Exception as exc:  # pickle / zip errors of every kind: name the file
+        raise ConfigError(f"swm show model requires a readable state_dict, got {weights} ({exc})") from exc
+    if not isinstance(state, dict):
+        raise ConfigError(f"swm show model requires a state_dict in {weights}, got {type(state).__name__}")
+    tensors = [v for v in state.values() if isinstance(v, torch.Tensor)]
+    return sum(int(t.numel()) for t in tensors), len(tensors)
+
+
+def _protocol_rows(protocol: dict[str, Any]) -> list[tuple[str, Any]]:
+    rows = [(label, protocol[key]) for label, key in PROTOCOL_ROWS if protocol.get(key) is not None]
+    for split in ("train", "val"):
+        episodes = protocol.get(f"{split}_episodes")
+        if isinstance(episodes, list):
+            rows.append((f"{split} episodes", len(episodes)))
+    final = protocol.get("final")
+    if isinstance(final, dict):
+        rows += [(f"final {k.replace('_', ' ')}", v) for k, v in final.items() if v is not None]
+    return rows
+
+
+def checkpoint_info(name: str, folder: Path) -> dict[str, Any]:
+    """What ``swm show model`` prints for a checkpoint folder: files, ``_target_``, parameters, protocol."""
+    from ..wm.utils import CONFIG_NAME, WEIGHTS_NAME, read_protocol
+
+    try:
+        config = json.loads((folder / CONFIG_NAME).read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"swm show model requires valid JSON in {folder / CONFIG_NAME}, got a corrupt file ({exc})") from exc
+    weights = folder / WEIGHTS_NAME
+    if not weights.is_file():
+        weights = sorted(folder.glob("*.pt"))[0]
+    elements, tensors = _count_parameters(weights)
+    return {
+        "name": name,
+        "format": f"checkpoint folder ({weights.name} + {CONFIG_NAME})",
+        "path": str(folder),
+        "target": config.get("_target_") if isinstance(config, dict) else None,
+        "parameters": elements,
+        "tensors": tensors,
+        "files": [(p.name + ("/" if p.is_dir() else ""), _entry_size(p)) for p in sorted(folder.iterdir())],
+        "protocol": _protocol_rows(read_protocol(weights)),
+    }
+
+
+def pickled_info(name: str, files: Sequence[Path]) -> dict[str, Any]:
+    """What ``swm show model`` prints for an older pickled checkpoint: its files (never unpickled)."""
+    from ..data import get_cache_dir
+
+    root = get_cache_dir()
+    return {
+        "name": name,
+        "format": "pickled module (*_object.ckpt, not loaded)",
+        "path": str(root),
+        "files": [(p.relative_to(root).as_posix(), p.stat().st_size) for p in files],
+    }
+
+
+def model_infos(name: str) -> list[dict[str, Any]]:
+    """One info dict per layout that holds model ``name`` (checkpoint folder first)."""
+    folder, files = _checkpoint_folder(name), _pickled_files(name)
+    return ([checkpoint_info(name, folder)] if folder else []) + ([pickled_info(name, files)] if files else [])
+
+
+def delete_model(name: str) -> list[Path]:
+    """Delete the checkpoint folder and/or the pickled files of model ``name``; returns what was removed."""
+    import shutil
+
+    from .. import data
+
+    removed = []
+    folder = _checkpoint_folder(name)
+    if folder is not None:
+        shutil.rmtree(folder)
+        removed.append(folder)
+    if name in data.list_models():
+        removed += data.delete_model(name)
+    return removed
 
 
 def _check_names(kind: str, names: Sequence[str], known: Sequence[str]) -> None:
@@ -42,24 +182,29 @@ def list_cmd(kind: Annotated[str, typer.Argument(help="What to list: model, data
 
 
 def show(
-    kind: Annotated[str, typer.Argument(help="What to show: dataset or world.", metavar="KIND", show_default=False)],
+    kind: Annotated[str, typer.Argument(help="What to show: model, dataset or world.", metavar="KIND", show_default=False)],
     names: Annotated[list[str] | None, typer.Argument(help="Names to show (see `swm list KIND`).", metavar="NAMES...", show_default=False)] = None,
-    all: Annotated[bool, typer.Option("--all", "-a", help="Show every cached dataset / registered world.")] = False,  # noqa: A002 (seed name)
+    all: Annotated[bool, typer.Option("--all", "-a", help="Show every cached model / dataset / registered world.")] = False,  # noqa: A002 (seed name)
 ) -> None:
-    """Show the columns, counts, shapes and factors of datasets, or the spaces and factors of worlds.
+    """Show the files, model class, parameter count and training protocol of models, the columns,
+    counts, shapes and factors of datasets, or the spaces and factors of worlds.
 
-    Example: swm show dataset tworoom-v1-expert; swm show world swm/TwoRoom-v1
+    Example: swm show model pusht-lewm; swm show dataset tworoom-v1-expert; swm show world swm/TwoRoom-v1
     """
     from ..data import dataset_info, world_info
-    from .display import display_dataset_info, display_world_info
+    from .display import display_dataset_info, display_model_info, display_world_info
 
-    kind = check_choice("kind", kind, ("dataset", "world"), ALIASES)
+    kind = check_choice("kind", kind, ("model", "dataset", "world"), ALIASES)
     known = sorted(_lister(kind)())
     if all:
         names = known
     elif not names:
         raise ConfigError(f"swm show {kind} requires NAMES or --all, got neither (known: {', '.join(known) or 'none'})")
     _check_names(kind, names, known)
+    if kind == "model":
+        for info in [info for name in names for info in model_infos(name)]:  # read all before printing
+            display_model_info(info)
+        return
     info, display = (dataset_info, display_dataset_info) if kind == "dataset" else (world_info, display_world_info)
     for name in names:
         display(info(name))
@@ -70,7 +215,8 @@ def delete(
     names: Annotated[list[str], typer.Argument(help="Names to delete (all must exist).", metavar="NAMES...", show_default=False)],
     yes: Annotated[bool, typer.Option("--yes", "-y", help="Do not ask for confirmation.")] = False,
 ) -> None:
-    """Delete cached models or datasets, after a confirmation (this cannot be undone).
+    """Delete cached models (checkpoint folders or pickled files) or datasets, after a confirmation
+    (this cannot be undone).
 
     Example: swm delete dataset tworoom-v1-random --yes
     """
@@ -84,7 +230,7 @@ def delete(
     if not yes and not typer.confirm(f"Delete {len(names)} {plural} ({', '.join(names)})? This cannot be undone."):
         typer.echo("Nothing deleted.", err=True)
         raise typer.Exit(code=1)
-    remove = data.delete_model if kind == "model" else data.delete_dataset
+    remove = delete_model if kind == "model" else data.delete_dataset
     out = console()
     for name in names:
         remove(name)

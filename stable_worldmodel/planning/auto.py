@@ -1,4 +1,12 @@
-"""Load a pickled model from the cache and pick the sub-module that plans or acts."""
+"""Load a world model from the cache and pick the sub-module that plans or acts.
+
+Two layouts are understood, the first that matches wins:
+
+    <cache>/checkpoints/<run>/              a checkpoint folder (see :mod:`stable_worldmodel.wm.utils`):
+        weights.pt  config.json  [protocol.json]   state_dict + ``_target_`` tree, rebuilt without pickle
+    <cache>/checkpoints/models--<user>--<repo>/    the same, named ``<user>/<repo>``
+    <cache>/<name>_object.ckpt              older runs: a whole pickled module (or a folder of them)
+"""
 
 from __future__ import annotations
 
@@ -24,18 +32,38 @@ def model_cache_dir(cache_dir: str | Path | None = None) -> Path:
     return get_cache_dir()
 
 
+def _pickled_names(root: Path) -> set[str]:
+    names = {p.name[: -len(SUFFIX)] for p in root.glob(f"*{SUFFIX}")}
+    return names | {p.name for p in root.iterdir() if p.is_dir() and any(p.rglob(f"*{SUFFIX}"))}
+
+
 def list_model_checkpoints(cache_dir: str | Path | None = None) -> list[str]:
-    """Names that :func:`AutoCostModel` accepts: ``<name>_object.ckpt`` files and folders holding some."""
+    """Names that :func:`AutoCostModel` accepts: checkpoint folders under ``checkpoints/`` (as
+    their path relative to it), ``<name>_object.ckpt`` files and folders holding some."""
+    from ..wm.utils import list_checkpoints
+
     root = model_cache_dir(cache_dir)
     if not root.is_dir():
         return []
-    names = {p.name[: -len(SUFFIX)] for p in root.glob(f"*{SUFFIX}")}
-    names |= {p.name for p in root.iterdir() if p.is_dir() and any(p.rglob(f"*{SUFFIX}"))}
-    return sorted(names)
+    return sorted(_pickled_names(root) | set(list_checkpoints(root)))
 
 
-def _checkpoint_path(model_name: str | Path, cache_dir: str | Path | None) -> Path:
-    root = model_cache_dir(cache_dir)
+def _new_layout_weights(model_name: str | Path, root: Path) -> Path | None:
+    """The weights file of ``model_name`` in the checkpoint-folder layout, or None when it is not one."""
+    from ..wm.utils import CONFIG_NAME, resolve_checkpoint
+
+    try:
+        weights = resolve_checkpoint(model_name, root)
+    except FileNotFoundError:
+        return None
+    if not (weights.parent / CONFIG_NAME).is_file():
+        logger.debug("%s has no %s beside it: not a loadable checkpoint folder", weights, CONFIG_NAME)
+        return None
+    return weights
+
+
+def _pickled_path(model_name: str | Path, root: Path) -> Path | None:
+    """The newest ``*_object.ckpt`` of ``model_name`` (a file, ``<name>_object.ckpt`` or a folder), or None."""
     path = Path(model_name).expanduser()
     path = path if path.is_absolute() else root / path
     if path.is_file():
@@ -43,13 +71,26 @@ def _checkpoint_path(model_name: str | Path, cache_dir: str | Path | None) -> Pa
     candidates = [Path(f"{path}{SUFFIX}")] if Path(f"{path}{SUFFIX}").is_file() else []
     if path.is_dir():
         candidates += list(path.rglob(f"*{SUFFIX}"))
-    if not candidates:
-        available = list_model_checkpoints(root)
-        raise UnknownNameError(
-            f"Model loading requires {path}{SUFFIX} or a folder of *{SUFFIX}, got {str(model_name)!r}."
-            f"{did_you_mean(str(model_name), available)} Available in {root}: {', '.join(available) or '(none)'}"
-        )
-    return max(candidates, key=lambda p: p.stat().st_mtime)
+    return max(candidates, key=lambda p: p.stat().st_mtime) if candidates else None
+
+
+def _unknown(caller: str, model_name: str | Path, root: Path) -> UnknownNameError:
+    from ..wm.utils import CONFIG_NAME, WEIGHTS_NAME, checkpoint_root
+
+    ckpts = checkpoint_root(root)
+    available = list_model_checkpoints(root)
+    name = str(model_name)
+    orphan = ""
+    weights = Path(model_name).expanduser()
+    weights = weights if weights.is_absolute() else ckpts / weights
+    if weights.is_dir() and (weights / WEIGHTS_NAME).is_file():
+        orphan = f" {weights} holds {WEIGHTS_NAME} but no {CONFIG_NAME}: save it with save_pretrained(..., config=...)."
+    return UnknownNameError(
+        f"{caller} requires a checkpoint folder {ckpts}/<run>/ ({WEIGHTS_NAME} + {CONFIG_NAME}), a .pt file with a "
+        f"{CONFIG_NAME} beside it, <user>/<repo> in {ckpts}/models--<user>--<repo>/ (nothing is downloaded), "
+        f"or a pickled {root}/<name>{SUFFIX} (or a folder of *{SUFFIX}), got {name!r}.{orphan}"
+        f"{did_you_mean(name, available)} Available in {root}: {', '.join(available) or '(none)'}"
+    )
 
 
 def _find_module(obj: Any, method: str) -> Any:
@@ -65,36 +106,51 @@ def _find_module(obj: Any, method: str) -> Any:
     return None
 
 
-def _load_with(model_name: str | Path, method: str, cache_dir: str | Path | None) -> Any:
+def _load_with(caller: str, model_name: str | Path, method: str, cache_dir: str | Path | None) -> Any:
     import torch
 
-    path = _checkpoint_path(model_name, cache_dir)
-    logger.info("loading %s from %s", method, path)
-    map_location = None if torch.cuda.is_available() else "cpu"
-    obj = torch.load(path, map_location=map_location, weights_only=False)
+    root = model_cache_dir(cache_dir)
+    weights = _new_layout_weights(model_name, root)
+    if weights is not None:
+        from ..wm.utils import load_checkpoint
+
+        logger.info("loading %s from %s", method, weights)
+        obj, _ = load_checkpoint(weights, root)
+        path = weights
+    else:
+        path = _pickled_path(model_name, root)
+        if path is None:
+            raise _unknown(caller, model_name, root)
+        logger.info("loading %s from %s", method, path)
+        map_location = None if torch.cuda.is_available() else "cpu"
+        obj = torch.load(path, map_location=map_location, weights_only=False)
     module = _find_module(obj, method)
     if module is None:
-        raise ConfigError(f"Auto model loading requires a module with {method}() in {path}, got {type(obj).__name__}")
+        hint = " (a state_dict: put the config.json of its model beside it)" if isinstance(obj, dict) else ""
+        raise ConfigError(f"{caller} requires a module with {method}() in {path}, got {type(obj).__name__}{hint}")
     if isinstance(module, torch.nn.Module):
         module.eval()
     return module
 
 
 def AutoCostModel(model_name: str | Path, cache_dir: str | Path | None = None) -> Any:  # noqa: N802 (seed name)
-    """Load the newest ``<cache>/<model_name>_object.ckpt`` and return its module with ``get_cost``.
+    """Load model ``model_name`` from the cache and return its module with ``get_cost`` (in eval mode).
 
-    ``model_name`` may also be a checkpoint file, or a folder (absolute or under the
-    cache) searched for ``*_object.ckpt``; the newest file wins. The checkpoint is a whole
-    pickled module (``torch.load(weights_only=False)``): unpickling runs arbitrary code,
-    so only load files you trust. The module found (the object itself or its first
-    sub-module with ``get_cost``) is put in eval mode.
+    ``model_name`` is tried first as a checkpoint of :mod:`stable_worldmodel.wm.utils` (a run
+    folder under ``<cache>/checkpoints/``, a ``.pt`` file with a ``config.json`` beside it, or
+    ``<user>/<repo>``): the model is rebuilt from ``config.json`` and its weights loaded on the
+    CPU (``weights_only=True``). Otherwise it is an older whole pickled module: the newest
+    ``<cache>/<model_name>_object.ckpt``, a checkpoint file, or a folder (absolute or under
+    the cache) searched for ``*_object.ckpt``. Unpickling those runs arbitrary code
+    (``weights_only=False``), so only load files you trust. The module returned is the
+    object itself or its first sub-module with ``get_cost``.
     """
-    return _load_with(model_name, "get_cost", cache_dir)
+    return _load_with("AutoCostModel", model_name, "get_cost", cache_dir)
 
 
 def AutoActionableModel(model_name: str | Path, cache_dir: str | Path | None = None) -> Any:  # noqa: N802
     """Like :func:`AutoCostModel`, returning the module with ``get_action`` (for FeedForwardPolicy).
 
-    Only load trusted files: the checkpoint is unpickled with ``weights_only=False``.
+    Only load trusted ``*_object.ckpt`` files: they are unpickled with ``weights_only=False``.
     """
-    return _load_with(model_name, "get_action", cache_dir)
+    return _load_with("AutoActionableModel", model_name, "get_action", cache_dir)

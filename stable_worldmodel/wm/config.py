@@ -11,13 +11,23 @@ from typing import Any, ClassVar
 
 from ..errors import ConfigError, did_you_mean
 
-__all__ = ["JEPAConfig", "IMAGENET_MEAN", "IMAGENET_STD"]
+__all__ = ["JEPAConfig", "IMAGENET_MEAN", "IMAGENET_STD", "VIT_SIZES"]
 
 IMAGENET_MEAN = (0.485, 0.456, 0.406)
 IMAGENET_STD = (0.229, 0.224, 0.225)
 
 _BATCHNORM = {"_target_": "torch.nn.BatchNorm1d", "_partial_": True}
 _P = "stable_worldmodel.wm"
+
+
+#: ViT sizes of ``vit_hf`` (the MLP width is 4x the hidden size)
+VIT_SIZES = {
+    "tiny": {"hidden_size": 192, "num_hidden_layers": 12, "num_attention_heads": 3},
+    "small": {"hidden_size": 384, "num_hidden_layers": 12, "num_attention_heads": 6},
+    "base": {"hidden_size": 768, "num_hidden_layers": 12, "num_attention_heads": 12},
+    "large": {"hidden_size": 1024, "num_hidden_layers": 24, "num_attention_heads": 16},
+    "huge": {"hidden_size": 1280, "num_hidden_layers": 32, "num_attention_heads": 16},
+}
 
 
 @dataclass
@@ -41,7 +51,7 @@ class JEPAConfig:
     encoder: str = "cnn"
     image_size: int = 64
     embed_dim: int = 64
-    cnn_width: int = 16
+    cnn_width: int = 8
     vit_size: str = "tiny"
     patch_size: int = 8
     vit_overrides: dict[str, Any] = field(default_factory=dict)
@@ -84,6 +94,8 @@ class JEPAConfig:
             raise ConfigError(f"{name} requires 0 <= val_fraction < 1, got {self.val_fraction!r}")
         if not 0.0 <= self.dropout < 1.0:
             raise ConfigError(f"{name} requires 0 <= dropout < 1, got {self.dropout!r}")
+        if self.encoder == "vit" and self.vit_size not in VIT_SIZES:
+            raise ConfigError(f"{name} requires vit_size in {sorted(VIT_SIZES)}, got {self.vit_size!r}.{did_you_mean(self.vit_size, VIT_SIZES)}")
         self.image_mean, self.image_std = tuple(self.image_mean), tuple(self.image_std)
 
     @property
@@ -123,8 +135,6 @@ class JEPAConfig:
     def encoder_dim(self) -> int:
         """Width of the encoder's output token."""
         if self.encoder == "vit":
-            from .encoders import VIT_SIZES
-
             return int(self.vit_overrides.get("hidden_size", VIT_SIZES[self.vit_size]["hidden_size"]))
         return self.embed_dim
 

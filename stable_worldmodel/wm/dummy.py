@@ -12,7 +12,7 @@ import torch
 from torch import nn
 
 from .. import keys
-from ..errors import UnknownNameError
+from ..errors import SpaceError, UnknownNameError
 
 __all__ = ["DummyWorldModel"]
 
@@ -56,17 +56,28 @@ class DummyWorldModel(nn.Module):
         return z
 
     def rollout(self, info: dict, candidates: torch.Tensor) -> dict:
+        """Add ``predicted_emb (B, S, H + 1, 10)`` for ``candidates (B, S, H, A)`` (``(B, H + 1, 10)``
+        for ``(B, H, A)``), starting from the last context frame's embedding."""
+        single = candidates.ndim == 3
+        if single:
+            candidates = candidates.unsqueeze(1)
+        if candidates.ndim != 4:
+            raise SpaceError(f"DummyWorldModel.rollout requires candidates (B, S, H, A) or (B, H, A), got shape {tuple(candidates.shape)}")
         b, s, h, _ = candidates.shape
-        if "emb" not in info:
+        z = info.get("emb")
+        if z is None:
             pixels = info[keys.PIXELS]
             pixels = pixels[:, 0] if pixels.ndim == len(self.image_shape) + 3 else pixels  # drop S
-            info["emb"] = self._embed(pixels)[:, -1]  # last context frame (B, 10)
-        z = info["emb"].unsqueeze(1).expand(b, s, -1)
+            z = info["emb"] = self._embed(pixels)  # (B, T, 10)
+        if z.ndim == 3:
+            z = z[:, -1]  # last context frame (B, 10)
+        z = z.unsqueeze(1).expand(b, s, -1)
         out = [z]
         for k in range(h):
             z = self.predictor(torch.cat([z, candidates[:, :, k].to(z.dtype)], dim=-1))
             out.append(z)
-        info["predicted_emb"] = torch.stack(out, dim=2)
+        predicted = torch.stack(out, dim=2)
+        info["predicted_emb"] = predicted[:, 0] if single else predicted
         return info
 
     def get_cost(self, info: dict, candidates: torch.Tensor) -> torch.Tensor:
@@ -75,11 +86,13 @@ class DummyWorldModel(nn.Module):
             goal = goal[:, 0] if goal.ndim == len(self.image_shape) + 3 else goal
             info["goal_emb"] = self._embed(goal)[:, -1]
         self.rollout(info, candidates)
-        return (info["predicted_emb"][:, :, -1] - info["goal_emb"].unsqueeze(1)).square().sum(-1)
+        final = info["predicted_emb"][..., -1, :]  # (B, S, 10) or (B, 10)
+        goal = info["goal_emb"] if final.ndim == 2 else info["goal_emb"].unsqueeze(1)
+        return (final - goal).square().sum(-1)
 
     def loss(self, batch: dict) -> dict:
         emb = self._embed(batch[keys.PIXELS])  # (B, T, 10)
         action = torch.nan_to_num(batch[keys.ACTION], 0.0).to(emb.dtype)
         pred = self.predictor(torch.cat([emb[:, :-1], action[:, :-1]], dim=-1))
-        loss = (pred - emb[:, 1:].detach()).square().mean()
+        loss = (pred - emb[:, 1:]).square().mean()  # no stop-gradient: with one, AdamW makes the embeddings (and the loss) grow
         return {"loss": loss, "pred_loss": loss, "emb": emb}

@@ -18,17 +18,10 @@ from torch import nn
 
 from .._optional import require
 from ..errors import ConfigError, SpaceError, did_you_mean
+from .config import VIT_SIZES
 
 __all__ = ["VIT_SIZES", "ConvEncoder", "EncoderOutput", "vit_hf"]
 
-#: ViT sizes of ``vit_hf`` (the MLP width is 4x the hidden size)
-VIT_SIZES = {
-    "tiny": {"hidden_size": 192, "num_hidden_layers": 12, "num_attention_heads": 3},
-    "small": {"hidden_size": 384, "num_hidden_layers": 12, "num_attention_heads": 6},
-    "base": {"hidden_size": 768, "num_hidden_layers": 12, "num_attention_heads": 12},
-    "large": {"hidden_size": 1024, "num_hidden_layers": 24, "num_attention_heads": 16},
-    "huge": {"hidden_size": 1280, "num_hidden_layers": 32, "num_attention_heads": 16},
-}
 
 
 def vit_hf(

@@ -111,7 +111,7 @@ class JEPA(nn.Module):
             emb = info[cache]
             return emb[:, 0] if s is not None and emb.ndim == 4 else emb
         images = _require(info, key, f"{type(self).__name__}.get_cost")
-        if s is not None:
+        if s is not None and images.ndim == 6:
             images = images[:, 0]  # the S copies of an env's info are views of one tensor
         emb = self.encode_pixels(images)
         info[cache] = emb.unsqueeze(1).expand(b, s, *emb.shape[1:]) if s is not None else emb

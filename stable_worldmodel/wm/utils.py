@@ -322,7 +322,10 @@ def load_checkpoint(
     if not isinstance(state, Mapping):
         raise ConfigError(f"load_pretrained requires a state_dict in {weights}, got {type(state).__name__}")
     state = convert_vit_keys(state, set(model.state_dict()))
-    missing, unexpected = model.load_state_dict(state, strict=False)
+    try:
+        missing, unexpected = model.load_state_dict(state, strict=False)
+    except RuntimeError as exc:  # same keys, other shapes: the config does not describe these weights
+        raise ConfigError(f"load_pretrained: the weights {weights} do not fit the model of {CONFIG_NAME} beside them: {exc}") from exc
     if missing or unexpected:
         raise ConfigError(
             f"load_pretrained: the weights {weights} do not fit the model of {CONFIG_NAME}: "

@@ -3,20 +3,25 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import numpy as np
 
 from stable_worldmodel.cli.stats import SuccessSummary, wilson_interval
 from stable_worldmodel.data import dataset_info, list_datasets
 
-TINY = ("--env", "swm/Toy-v0", "--episodes", "2", "--eval-episodes", "4", "--image-size", "16", "--max-steps", "12")
+BASE = ("--env", "swm/Toy-v0", "--episodes", "2", "--eval-episodes", "4", "--image-size", "16", "--max-steps", "12")
+#: no training: what the tests of the collect / evaluate / plot steps need
+TINY = (*BASE, "--model", "none")
+#: the whole loop with a dummy world model, a few steps and a small CEM
+LEARNED = (*BASE, "--model", "dummy", "--train-steps", "3", "--samples", "16", "--iterations", "2", "--num-envs", "2")
 
 
 def test_demo_writes_videos_plot_results_and_one_last_line(swm, tmp_path):
     import imageio.v3 as iio
 
     out = tmp_path / "demo"
-    result = swm("demo", *TINY, "--out", str(out))
+    result = swm("demo", *LEARNED, "--out", str(out))
     assert result.exit_code == 0, result.output
     stdout = result.stdout
 
@@ -26,7 +31,7 @@ def test_demo_writes_videos_plot_results_and_one_last_line(swm, tmp_path):
     assert "dataset demo-toy-v0-expert" in stdout
 
     # one MP4 per policy, readable, at most max_steps + 1 frames
-    for policy in ("random", "expert"):
+    for policy in ("random", "expert", "dummy+cem"):
         frames = iio.imread(out / f"{policy}.mp4")
         assert frames.ndim == 4 and 1 <= len(frames) <= 13
         assert frames.shape[-1] == 3
@@ -44,11 +49,18 @@ def test_demo_writes_videos_plot_results_and_one_last_line(swm, tmp_path):
         assert np.allclose(row["ci95"], wilson_interval(row["successes"], 4), atol=1e-4)
         assert f"{100 * row['success_rate']:.1f}%" in next(line for line in stdout.splitlines() if line.startswith(f"│ {policy} "))
     assert results["policies"]["expert"]["successes"] == 4
+    assert list(results["policies"]) == ["random", "expert", "dummy+cem"]
+
+    # the model: trained for the steps asked, saved where the record says, planned with the CEM asked
+    model = results["model"]
+    assert model["run"] == "demo-dummy" and model["steps"] == 3
+    assert (Path(model["checkpoint"]) / "weights.pt").is_file() and (Path(model["checkpoint"]) / "config.json").is_file()
+    assert model["plan"]["solver"] == "cem" and model["plan"]["samples"] == 16 and model["plan"]["iterations"] == 2
 
     # exactly one closing line naming where the outputs are
     last = stdout.strip().splitlines()[-1]
     assert last.startswith(f"Demo outputs in {out.resolve()} ")
-    for name in ("random.mp4", "expert.mp4", "success_rates.png", "results.json", "demo-toy-v0-expert"):
+    for name in ("random.mp4", "expert.mp4", "dummy+cem.mp4", "success_rates.png", "results.json", "demo-toy-v0-expert", model["checkpoint"]):
         assert name in last
 
 
@@ -81,3 +93,11 @@ def test_plot_handles_extreme_rates(tmp_path):
     summaries = [SuccessSummary("none", 5, 0, 10.0), SuccessSummary("all", 5, 5, 3.0)]
     path = plot_success_rates(summaries, tmp_path / "p.png", "extremes")
     assert path.read_bytes().startswith(b"\x89PNG")
+
+
+def test_demo_unknown_model_is_one_line_before_any_work(swm, error_line, tmp_path):
+    result = swm("demo", *BASE, "--model", "lewn", "--out", str(tmp_path / "d"))
+    assert result.exit_code == 1
+    line = error_line(result)
+    assert "'lewn'" in line and "lewm" in line
+    assert not (tmp_path / "d").exists() and list_datasets() == []

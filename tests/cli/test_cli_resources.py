@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+
 import pytest
 
 from stable_worldmodel.data import get_cache_dir, list_datasets, list_models
@@ -23,6 +25,20 @@ def two_models():
     return ["wm-large", "wm-small"]
 
 
+@pytest.fixture
+def checkpoint():
+    """A checkpoint folder ``checkpoints/runx`` (tiny dummy model) with a protocol; returns its parameter count."""
+    from stable_worldmodel import wm
+    from stable_worldmodel.wm.utils import save_pretrained
+
+    model = wm.make("dummy", "tiny", action_dim=2)
+    weights = save_pretrained(model, "runx", config=wm.get_config("dummy", "tiny").target_tree(2))
+    protocol = {"model": "dummy", "dataset": "toy-expert", "steps": 40, "history_size": 1, "frameskip": 5, "image_size": 16,
+                "final": {"train_loss": 0.25, "val_loss": 0.5}}
+    (weights.parent / "protocol.json").write_text(json.dumps(protocol))
+    return sum(v.numel() for v in model.state_dict().values())
+
+
 # -- list --------------------------------------------------------------------------------
 def test_list_datasets(swm, two_datasets):
     result = swm("list", "dataset")
@@ -42,6 +58,14 @@ def test_list_models_accepts_plural(swm, two_models):
     result = swm("list", "models")
     assert result.exit_code == 0
     assert "Cached models (2)" in result.stdout and "wm-small" in result.stdout and "wm-large" in result.stdout
+
+
+def test_list_models_both_layouts(swm, two_models, checkpoint):
+    result = swm("list", "model")
+    assert result.exit_code == 0
+    assert "Cached models (3)" in result.stdout
+    for name in ("runx", "wm-small", "wm-large"):
+        assert name in result.stdout
 
 
 def test_list_worlds(swm):
@@ -108,10 +132,47 @@ def test_show_unknown_world_and_kind(swm, error_line):
     result = swm("show", "world", "swm/TwoRom-v1")
     assert result.exit_code == 1
     assert "swm/TwoRoom-v1" in error_line(result)
-    result = swm("show", "model", "x")
+    result = swm("show", "solver", "x")
     assert result.exit_code == 1
     line = error_line(result)
-    assert "'model'" in line and "dataset" in line and "world" in line
+    assert "'solver'" in line and "model" in line and "dataset" in line and "world" in line
+
+
+def test_show_checkpoint_folder(swm, checkpoint):
+    result = swm("show", "model", "runx")
+    assert result.exit_code == 0
+    out = result.stdout
+    assert "model runx" in out and "checkpoints/runx" in out
+    assert "weights.pt" in out and "config.json" in out and "protocol.json" in out and "KiB" in out
+    assert "stable_worldmodel.wm.dummy.DummyWorldModel" in out
+    assert f"{checkpoint:,}" in out  # counted from the state_dict
+    assert "toy-expert" in out and "frameskip" in out and " 5 " in out and "image size" in out
+    assert "final train loss" in out and "0.25" in out and "final val loss" in out
+
+
+def test_show_checkpoint_without_protocol(swm):
+    from stable_worldmodel import wm
+    from stable_worldmodel.wm.utils import save_pretrained
+
+    save_pretrained(wm.make("dummy", "tiny", action_dim=2), "upstream", config=wm.get_config("dummy", "tiny").target_tree(2))
+    result = swm("show", "model", "upstream")
+    assert result.exit_code == 0
+    assert "DummyWorldModel" in result.stdout and "no protocol.json" in result.stdout
+
+
+def test_show_pickled_model_lists_files_without_loading(swm, two_models, checkpoint):
+    result = swm("show", "models", "--all")  # the pickled files hold b"o": unpickling them would fail
+    assert result.exit_code == 0
+    out = result.stdout
+    assert "model runx" in out and "model wm-small" in out and "model wm-large" in out
+    assert "wm-small_object.ckpt" in out and "wm-small_weights.ckpt" in out and "pickled" in out
+
+
+def test_show_unknown_model_suggests(swm, error_line, checkpoint):
+    result = swm("show", "model", "runz")
+    assert result.exit_code == 1
+    line = error_line(result)
+    assert "'runz'" in line and "Did you mean 'runx'" in line
 
 
 # -- delete ------------------------------------------------------------------------------
@@ -156,6 +217,18 @@ def test_delete_models(swm, two_models):
     assert result.exit_code == 0
     assert list_models() == ["wm-large"]
     assert not list(get_cache_dir().glob("wm-small_*"))
+
+
+def test_delete_checkpoint_folder(swm, two_models, checkpoint):
+    folder = get_cache_dir() / "checkpoints" / "runx"
+    declined = swm("delete", "model", "runx", input="n\n")
+    assert declined.exit_code == 1 and "Delete 1 model (runx)?" in declined.output and folder.is_dir()
+    result = swm("delete", "model", "runx", input="y\n")
+    assert result.exit_code == 0
+    assert "Deleted model runx" in result.stdout
+    assert not folder.exists()
+    assert "runx" not in swm("list", "model").stdout
+    assert list_models() == ["wm-large", "wm-small"]  # the pickled ones are untouched
 
 
 def test_delete_unknown_kind(swm, error_line, two_datasets):

@@ -24,7 +24,7 @@ class LeWMConfig(JEPAConfig):
     model_name: ClassVar[str] = "lewm"
     target: ClassVar[str] = "stable_worldmodel.wm.lewm.LeWM"
     presets: ClassVar[dict[str, dict[str, Any]]] = {
-        "tiny": {},
+        "tiny": {"sigreg_num_proj": 256},
         "small": {
             "encoder": "vit", "vit_size": "tiny", "patch_size": 8, "vit_overrides": {"num_hidden_layers": 6},
             "embed_dim": 192, "depth": 4, "heads": 8, "dim_head": 32, "mlp_dim": 768, "projector_hidden": 1024,
