@@ -16,7 +16,7 @@ import numpy as np
 import torch
 
 from .. import keys
-from ..errors import ConfigError, DatasetFormatError
+from ..errors import ConfigError, DatasetFormatError, did_you_mean
 from ..wm.preprocess import Normalizer, preprocess_images
 
 logger = logging.getLogger(__name__)
@@ -45,8 +45,16 @@ class TrainData:
 
     def __init__(self, name: str, cfg: Any, seed: int, device: torch.device, cache_dir: str | None = None):
         from ..data import HDF5Dataset
+        from ..data.utils import resolve_dataset_path
 
         self.cfg, self.device = cfg, device
+        path = resolve_dataset_path(name, cache_dir)
+        if not path.is_file():
+            names = sorted(p.stem for p in path.parent.glob("*.h5"))
+            raise FileNotFoundError(
+                f"Training requires a recorded .h5 dataset, got {str(name)!r} ({path} does not exist).{did_you_mean(str(name), names)} "
+                f"Datasets in {path.parent}: {', '.join(names) or '(none)'}"
+            )
         self.dataset = HDF5Dataset(name, frameskip=cfg.frameskip, num_steps=cfg.num_steps, cache_dir=cache_dir)
         missing = [k for k in (keys.PIXELS, keys.ACTION) if k not in self.dataset.column_names]
         if missing:
@@ -108,11 +116,13 @@ class TrainData:
         return self.batch(self.train_index[pick])
 
     def val_batches(self, batch_size: int, max_samples: int) -> list[np.ndarray]:
-        """Fixed validation index batches (evenly spread over the validation samples)."""
+        """Fixed validation index batches (evenly spread over the validation samples), of at most
+        ``batch_size`` and near-equal sizes: no lone last sample, whose batch statistics
+        (VCReg's variance, SIGReg) would be NaN."""
         if not self.num_val:
             return []
         take = self.val_index[np.linspace(0, self.num_val - 1, min(max_samples, self.num_val)).astype(np.int64)]
-        return [take[i : i + batch_size] for i in range(0, len(take), batch_size)]
+        return np.array_split(take, -(-len(take) // batch_size))
 
     def protocol(self) -> dict[str, Any]:
         """What planning and evaluation need to know about the data the model saw."""

@@ -112,6 +112,7 @@ class Trainer:
         self.scaler = torch.amp.GradScaler(device.type, enabled=precision == "16")
         self.generator = torch.Generator().manual_seed(seed)
         self.step = 0
+        self.window: list[float] = []  # train losses since the last log (checkpointed, for exact resume)
         self._collapse_warned = False
 
     # -- state -------------------------------------------------------------------------------
@@ -130,6 +131,7 @@ class Trainer:
                 "batches": self.generator.get_state(),
             },
             "steps": self.steps,
+            "loss_window": list(self.window),
         }
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
@@ -138,6 +140,7 @@ class Trainer:
         self.scheduler.load_state_dict(state["scheduler"])
         self.scaler.load_state_dict(state["scaler"])
         self.step = int(state["step"])
+        self.window = [float(v) for v in state.get("loss_window", [])]
         rng = state["rng"]
         torch.set_rng_state(rng["torch"])
         if rng["cuda"] and torch.cuda.is_available():
@@ -190,9 +193,10 @@ class Trainer:
         bs = self.cfg.batch_size
         self.model.train()
         start, start_step = time.perf_counter(), self.step
-        last_loss, val_loss = float("nan"), None
+        logged = log.read()  # a resumed run's records up to its step (a finished run has no step left to log)
+        last_loss = next((r["train/loss"] for r in reversed(logged) if "train/loss" in r), float("nan"))
+        val_loss = next((r["val/loss"] for r in logged if "val/loss" in r and r.get("step") == self.step), None)
         bar = tqdm(total=self.steps, initial=self.step, desc=f"train {self.run}", unit="step", disable=not self.progress, dynamic_ncols=True)
-        window: list[float] = []
         try:
             while self.step < self.steps:
                 batch = self.data.train_batch(self.generator, bs)
@@ -210,11 +214,11 @@ class Trainer:
                 self.scaler.update()
                 self.scheduler.step()
                 self.step += 1
-                window.append(float(loss.detach()))
+                self.window.append(float(loss.detach()))
                 bar.update(1)
                 if self.step % self.log_every == 0 or self.step == self.steps:
-                    last_loss = sum(window) / len(window)
-                    window.clear()
+                    last_loss = sum(self.window) / len(self.window)
+                    self.window.clear()
                     rate = (self.step - start_step) * bs / max(time.perf_counter() - start, 1e-9)
                     record = {"step": self.step, "train/loss": last_loss, "lr": self.scheduler.get_last_lr()[0], "samples_per_s": rate}
                     record.update({f"train/{k}": float(v.detach()) for k, v in out.items() if k != "loss" and torch.is_tensor(v) and v.ndim == 0})
@@ -230,7 +234,7 @@ class Trainer:
                     self.save()
         finally:
             bar.close()
-        if val_loss is None or not self.val_every:
+        if val_loss is None:
             val_loss = self.validate()
             if val_loss is not None:
                 log.log({"step": self.step, "val/loss": val_loss})

@@ -1,0 +1,125 @@
+"""Fixtures of the trainer tests: one toy dataset recorded once per session and copied into each
+test's cache, synthetic datasets with chosen columns, tiny model sizes, and the ``swm`` runner."""
+
+from __future__ import annotations
+
+import shutil
+
+import numpy as np
+import pytest
+import torch
+from typer.testing import CliRunner
+
+TOY = "swm/Toy-v0"
+#: name of the recorded dataset in every test's cache
+DATASET = "toy"
+#: episodes of the recorded dataset (lengths 3 to 13 rows: the expert reaches the goal quickly)
+EPISODES = 10
+#: a width-8 CNN world model at 16x16 with one predictor layer (LeWM, PLDM)
+NET = dict(
+    image_size=16, embed_dim=8, cnn_width=8, depth=1, heads=2, dim_head=4, mlp_dim=16, projector_hidden=16,
+    history_size=2, frameskip=1, warmup_steps=0,
+)
+#: what each model of the ``tiny`` preset needs on top of the preset to train in well under a second
+TINY = {
+    "dummy": dict(image_size=16, frameskip=1, warmup_steps=0),
+    "lewm": dict(NET, sigreg_num_proj=16),
+    "pldm": dict(NET, idm_hidden=16),
+}
+
+
+@pytest.fixture(autouse=True)
+def _one_thread():
+    """Width-8 models are fastest on one thread (and the CPU may be shared)."""
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(threads)
+
+
+@pytest.fixture(scope="session")
+def _recorded(tmp_path_factory):
+    """The toy dataset, recorded once: ``EPISODES`` expert episodes at 16x16."""
+    from stable_worldmodel import World
+    from stable_worldmodel.envs import expert_policy
+
+    root = tmp_path_factory.mktemp("recorded")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("STABLEWM_HOME", str(root))
+        with World(TOY, 1, (16, 16), max_episode_steps=20, verbose=0) as world:
+            world.set_policy(expert_policy(TOY))
+            return world.record_dataset(DATASET, episodes=EPISODES, seed=0, cache_dir=root)
+
+
+@pytest.fixture
+def toy(_recorded, _stablewm_home) -> str:
+    """The name of the recorded toy dataset, copied into this test's cache."""
+    _stablewm_home.mkdir(parents=True, exist_ok=True)
+    shutil.copy(_recorded, _stablewm_home / f"{DATASET}.h5")
+    return DATASET
+
+
+@pytest.fixture
+def write_dataset(_stablewm_home):
+    """``write_dataset(name, columns=("pixels", "action"), lengths=(6, 6, 6))``: a synthetic
+    dataset in the cache with only ``columns`` (random 16x16 pixels, 2-d actions)."""
+    from stable_worldmodel.data.writer import HDF5Writer
+
+    def write(name: str, columns=("pixels", "action"), lengths=(6, 6, 6)):
+        rng = np.random.default_rng(0)
+        make = {
+            "pixels": lambda n: rng.integers(0, 256, (n, 16, 16, 3), dtype=np.uint8),
+            "action": lambda n: rng.normal(size=(n, 2)).astype(np.float32),
+            "reward": lambda n: rng.normal(size=n),
+        }
+        _stablewm_home.mkdir(parents=True, exist_ok=True)
+        path = _stablewm_home / f"{name}.h5"
+        with HDF5Writer(path) as writer:
+            writer.write_episodes([{c: make[c](n) for c in columns} for n in lengths])
+        return name
+
+    return write
+
+
+@pytest.fixture
+def fit(toy):
+    """``fit(model, name, **kwargs)``: :func:`stable_worldmodel.train.train` on the toy dataset on the
+    CPU, tiny sizes (``TINY[model]``, none for an unknown model), batch 8, no progress bar; ``kwargs`` override anything."""
+    from stable_worldmodel.train import train
+
+    def run(model: str, name: str, **kwargs):
+        args = dict(dataset=toy, batch_size=8, device="cpu", name=name, seed=0, progress=False, **TINY.get(model, {}))
+        args.update(kwargs)
+        return train(model, **args)
+
+    return run
+
+
+@pytest.fixture
+def swm():
+    """``swm(*args)`` runs the command in-process and returns Typer's Result."""
+    from stable_worldmodel.cli import app
+
+    runner = CliRunner()
+    return lambda *args: runner.invoke(app, list(args), prog_name="swm")
+
+
+@pytest.fixture
+def error_line():
+    """``error_line(result)``: the single ``Error: ...`` line of a failed command (asserted to be one line)."""
+
+    def line(result) -> str:
+        lines = [text for text in result.stderr.splitlines() if text.strip()]
+        assert len(lines) == 1, f"expected one error line, got {lines!r}"
+        assert lines[0].startswith("Error: "), lines[0]
+        assert "Traceback" not in result.output
+        assert result.exception is None or isinstance(result.exception, SystemExit), result.exception
+        return lines[0]
+
+    return line
+
+
+@pytest.fixture
+def tiny():
+    """The tiny sizes of each model (``TINY``)."""
+    return TINY

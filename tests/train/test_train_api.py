@@ -1,0 +1,334 @@
+"""``stable_worldmodel.train.train``: the loss falls, resume equals an uninterrupted run, the run
+folder, the seeded episode split, and the errors. Tiny models (width 8, 16x16) on a recorded toy
+dataset of 10 expert episodes (see ``conftest.py``)."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+
+import h5py
+import numpy as np
+import pytest
+import torch
+
+from stable_worldmodel import keys
+from stable_worldmodel.errors import ConfigError, DatasetFormatError, UnknownNameError
+from stable_worldmodel.train import trainer as trainer_module
+from stable_worldmodel.train.data import TrainData, split_episodes
+from stable_worldmodel.wm import get_config
+from stable_worldmodel.wm.utils import list_checkpoints, load_pretrained
+
+
+def train_losses(folder) -> list[tuple[int, float]]:
+    """``(step, train/loss)`` of every record of ``metrics.jsonl``."""
+    records = [json.loads(line) for line in (folder / "metrics.jsonl").read_text().splitlines()]
+    return [(r["step"], r["train/loss"]) for r in records if "train/loss" in r]
+
+
+def weights(path) -> dict[str, torch.Tensor]:
+    return torch.load(path, map_location="cpu", weights_only=True)
+
+
+def assert_same_weights(a: dict[str, torch.Tensor], b: dict[str, torch.Tensor]) -> None:
+    assert a.keys() == b.keys()
+    differ = [k for k in a if not torch.equal(a[k], b[k])]
+    assert not differ, f"tensors differ: {differ}"
+
+
+def outputs(model: torch.nn.Module) -> torch.Tensor:
+    """Costs of fixed candidates from fixed images: they go through every module of the model."""
+    gen = torch.Generator().manual_seed(7)
+    info = {keys.PIXELS: torch.randn(2, 3, 1, 3, 16, 16, generator=gen), keys.GOAL: torch.randn(2, 3, 1, 3, 16, 16, generator=gen)}
+    model.eval()
+    with torch.no_grad():
+        return model.get_cost(info, torch.randn(2, 3, 2, 2, generator=gen))
+
+
+@pytest.fixture
+def captured(monkeypatch):
+    """The trainers that ran (their ``model`` is the trained module itself)."""
+    seen = []
+    fit = trainer_module.Trainer.fit
+
+    def spy(self, log):
+        seen.append(self)
+        return fit(self, log)
+
+    monkeypatch.setattr(trainer_module.Trainer, "fit", spy)
+    return seen
+
+
+class Crash(Exception):
+    """Stands for a killed run."""
+
+
+def crash_after(monkeypatch, batches: int) -> None:
+    """Make training raise :class:`Crash` when it asks for batch number ``batches + 1``."""
+    draw, calls = TrainData.train_batch, []
+
+    def train_batch(self, generator, batch_size):
+        calls.append(1)
+        if len(calls) > batches:
+            raise Crash
+        return draw(self, generator, batch_size)
+
+    monkeypatch.setattr(TrainData, "train_batch", train_batch)
+
+
+# -- learning ----------------------------------------------------------------------------------
+@pytest.mark.parametrize("model", ["dummy", "lewm", "pldm"])
+def test_loss_falls(fit, model):
+    # 40 steps at lr 3e-3: the last logged losses are 0.02-0.72x the first ones over seeds 0..11
+    result = fit(model, f"falls-{model}", steps=40, lr=3e-3, log_every=5, val_every=0, ckpt_every=0)
+    losses = [loss for _, loss in train_losses(result.folder)]
+    assert len(losses) == 8 and all(math.isfinite(v) for v in losses)
+    first, last = np.mean(losses[:2]), np.mean(losses[-2:])
+    assert last < 0.85 * first, f"{model} did not learn: {losses}"
+    assert result.train_loss == losses[-1] and result.steps == 40
+    assert result.val_loss is not None and math.isfinite(result.val_loss)
+
+
+@pytest.mark.parametrize(
+    ("model", "every", "crash", "logged"),
+    [
+        # dropout and SIGReg's random directions draw from the global RNG: resume must restore it
+        ("lewm", dict(log_every=2, val_every=4, ckpt_every=6), 8, [2, 4, 6, 8, 10, 12]),
+        ("pldm", dict(log_every=2, val_every=4, ckpt_every=6), 8, [2, 4, 6, 8, 10, 12]),
+        # a checkpoint between two logs: the resumed log at step 8 averages steps 5..8, as the whole run's
+        ("dummy", dict(log_every=4, val_every=0, ckpt_every=6), 9, [4, 8, 12]),
+    ],
+)
+def test_resume_equals_an_uninterrupted_run(fit, monkeypatch, model, every, crash, logged):
+    kwargs = dict(steps=12, lr=3e-3, **every, **({"dropout": 0.1} if model != "dummy" else {}))
+    whole = fit(model, "whole", **kwargs)
+
+    with monkeypatch.context() as mp:
+        crash_after(mp, crash)  # killed at step `crash`: the last checkpoint is step 6
+        with pytest.raises(Crash):
+            fit(model, "split", **kwargs)
+    folder = whole.folder.parent / "split"
+    assert torch.load(folder / "train_state.ckpt", weights_only=False)["step"] == 6
+    assert train_losses(folder)[-1][0] > 6  # logged after the checkpoint: dropped on resume
+
+    resumed = fit(model, "split", resume=True, **kwargs)
+    assert resumed.steps == 12
+    assert_same_weights(weights(whole.folder / "weights.pt"), weights(folder / "weights.pt"))
+    assert train_losses(folder) == train_losses(whole.folder)  # each logged step once, with the same loss
+    assert [s for s, _ in train_losses(folder)] == logged
+    assert resumed.train_loss == whole.train_loss and resumed.val_loss == whole.val_loss
+
+
+def test_resume_of_a_finished_run_changes_nothing(fit):
+    done = fit("dummy", "done", steps=6, log_every=2)
+    before, metrics = weights(done.folder / "weights.pt"), (done.folder / "metrics.jsonl").read_text()
+    again = fit("dummy", "done", steps=6, log_every=2, resume=True)
+    assert again.steps == 6 and again.train_loss == done.train_loss and again.val_loss == done.val_loss
+    assert_same_weights(before, weights(done.folder / "weights.pt"))
+    assert (done.folder / "metrics.jsonl").read_text() == metrics
+
+
+# -- the run folder ----------------------------------------------------------------------------
+def test_run_folder_holds_model_protocol_metrics_plot_and_checkpoints(fit, captured, toy, _stablewm_home):
+    result = fit("lewm", "layout", steps=8, log_every=2, val_every=4, ckpt_every=4)
+    folder = _stablewm_home / "checkpoints" / "layout"
+    assert result.folder == folder and result.run == "layout"
+    for name in ("weights.pt", "config.json", "protocol.json", "train_state.ckpt", "metrics.jsonl", "metrics.csv", "loss.png"):
+        assert (folder / name).is_file(), name
+    assert (folder / "loss.png").read_bytes().startswith(b"\x89PNG")
+    assert list(folder.glob("*.pt")) == [folder / "weights.pt"]  # load_pretrained needs exactly one
+
+    # periodic checkpoints: step 4 only (step 8 is the run folder itself)
+    assert sorted(p.name for p in folder.glob("step_*")) == ["step_000004"]
+    step4 = folder / "step_000004"
+    assert json.loads((step4 / "protocol.json").read_text())["steps_done"] == 4
+    assert torch.load(folder / "train_state.ckpt", weights_only=False)["step"] == 8
+    assert list_checkpoints() == ["layout", "layout/step_000004"]
+
+    # metrics: the same records in jsonl and csv, train loss every 2 steps, val loss every 4
+    records = [json.loads(line) for line in (folder / "metrics.jsonl").read_text().splitlines()]
+    assert records == result.history
+    assert [r["step"] for r in records if "train/loss" in r] == [2, 4, 6, 8]
+    assert [r["step"] for r in records if "val/loss" in r] == [4, 8]
+    with (folder / "metrics.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert [int(r["step"]) for r in rows] == [r["step"] for r in records]
+    assert [float(r["train/loss"]) for r in rows] == pytest.approx([r["train/loss"] for r in records])
+
+    # protocol: what planning needs to know
+    protocol = json.loads((folder / "protocol.json").read_text())
+    assert protocol["model"] == "lewm" and protocol["dataset"] == toy and protocol["seed"] == 0
+    assert protocol["frameskip"] == 1 and protocol["history_size"] == 2 and protocol["num_preds"] == 1
+    assert protocol["steps"] == protocol["steps_done"] == 8 and protocol["action_dim"] == 2
+    assert protocol["dataset_image_shape"] == [16, 16, 3] and protocol["image_size"] == 16
+    assert protocol["final"] == {"train_loss": result.train_loss, "val_loss": result.val_loss}
+    assert sorted(protocol["train_episodes"] + protocol["val_episodes"]) == list(range(10))
+
+    # the action normalizer is fitted on the train episodes' rows only
+    with h5py.File(_stablewm_home / f"{toy}.h5") as f:
+        action, offsets, lengths = f["action"][:], f["ep_offset"][:], f["ep_len"][:]
+    rows = np.concatenate([np.arange(offsets[e], offsets[e] + lengths[e]) for e in protocol["train_episodes"]])
+    train_actions = action[rows][~np.isnan(action[rows]).any(axis=1)]
+    normalizer = protocol["normalizers"]["action"]
+    np.testing.assert_allclose(normalizer["mean"], train_actions.mean(axis=0), rtol=1e-6)
+    np.testing.assert_allclose(normalizer["std"], train_actions.std(axis=0), rtol=1e-6)
+
+    # load_pretrained rebuilds the trained model; the step-4 checkpoint is an earlier one
+    (trainer,) = captured
+    expected = outputs(trainer.model)
+    assert torch.equal(outputs(load_pretrained("layout")), expected)
+    assert not torch.equal(outputs(load_pretrained("layout/step_000004")), expected)
+
+
+def test_default_run_name_and_epochs(fit, toy):
+    data = TrainData(toy, get_config("dummy", "tiny", image_size=16, frameskip=1), seed=0, device=torch.device("cpu"))
+    result = fit("dummy", None, epochs=2)
+    assert result.run == f"{toy}-dummy"
+    assert result.steps == math.ceil(2 * data.num_train / 8)
+    assert json.loads((result.folder / "protocol.json").read_text())["steps"] == result.steps
+
+
+def test_the_trainer_resizes_images_to_the_model(fit, captured):
+    result = fit("dummy", "small-images", steps=2, image_size=8)
+    assert captured[0].model.encoder.in_features == 3 * 8 * 8
+    protocol = json.loads((result.folder / "protocol.json").read_text())
+    assert protocol["image_size"] == 8 and protocol["dataset_image_shape"] == [16, 16, 3]
+    model = load_pretrained("small-images")
+    assert model.encode({keys.PIXELS: torch.zeros(1, 3, 8, 8)})["emb"].shape == (1, 10)
+
+
+# -- the train / validation split ---------------------------------------------------------------
+@pytest.mark.parametrize("episodes", [2, 5, 10, 37])
+def test_split_is_by_episode_seeded_disjoint_and_complete(episodes):
+    for seed in range(5):
+        train, val = split_episodes(episodes, 0.1, seed)
+        again = split_episodes(episodes, 0.1, seed)
+        assert np.array_equal(train, again[0]) and np.array_equal(val, again[1])
+        assert not set(train) & set(val)
+        assert sorted([*train, *val]) == list(range(episodes))
+        assert list(train) == sorted(train) and list(val) == sorted(val)
+        assert len(val) == max(1, round(0.1 * episodes))
+    splits = {tuple(split_episodes(episodes, 0.1, seed)[1]) for seed in range(5)}
+    assert len(splits) > 1, "the split does not depend on the seed"
+    assert split_episodes(episodes, 0.0, 0)[1].size == 0
+
+
+def test_split_is_recorded_and_samples_stay_in_their_split(fit, toy):
+    cfg = get_config("dummy", "tiny", image_size=16, frameskip=1, val_fraction=0.3)
+    for seed in (0, 1):
+        data = TrainData(toy, cfg, seed=seed, device=torch.device("cpu"))
+        train, val = split_episodes(10, 0.3, seed)
+        assert data.train_episodes.tolist() == train.tolist() and data.val_episodes.tolist() == val.tolist()
+        eps_train, _ = data.dataset._locate_many(data.train_index)
+        eps_val, _ = data.dataset._locate_many(data.val_index)
+        assert set(eps_train) == set(train.tolist()) and set(eps_val) == set(val.tolist())
+        protocol = fit("dummy", f"split-{seed}", steps=1, seed=seed, val_fraction=0.3).folder / "protocol.json"
+        recorded = json.loads(protocol.read_text())
+        assert recorded["train_episodes"] == train.tolist() and recorded["val_episodes"] == val.tolist()
+        assert recorded["train_samples"] == data.num_train and recorded["val_samples"] == data.num_val
+    assert split_episodes(10, 0.3, 0)[1].tolist() != split_episodes(10, 0.3, 1)[1].tolist()
+
+
+def test_validation_batches_have_no_lone_sample(toy):
+    # a batch of one sample makes batch statistics (VCReg's variance, SIGReg) NaN
+    cfg = get_config("pldm", "tiny", image_size=16, frameskip=1, val_fraction=0.3)
+    data = TrainData(toy, cfg, seed=0, device=torch.device("cpu"))
+    assert data.num_val >= 5
+    for size in range(2, data.num_val + 1):
+        batches = data.val_batches(size, 512)
+        assert np.array_equal(np.concatenate(batches), data.val_index)
+        assert all(2 <= len(b) <= size for b in batches), (size, [len(b) for b in batches])
+
+
+def test_pldm_validation_loss_is_finite_when_one_sample_is_left_over(fit, toy, tiny):
+    cfg = get_config("pldm", "tiny", **tiny["pldm"])
+    num_val = TrainData(toy, cfg, seed=0, device=torch.device("cpu")).num_val
+    assert num_val > 3
+    result = fit("pldm", "leftover", steps=2, batch_size=num_val - 1)
+    assert math.isfinite(result.val_loss)
+
+
+# -- errors ------------------------------------------------------------------------------------
+
+@pytest.fixture
+def refused(fit, _stablewm_home):
+    """``refused(exc, match, model, **kwargs)``: ``fit(model, "r", **kwargs)`` raises ``exc`` with a
+    message matching ``match``, and leaves no run folder behind."""
+
+    def check(exc, match, model="lewm", **kwargs):
+        name = kwargs.pop("name", "r")
+        with pytest.raises(exc, match=match):
+            fit(model, name, **{"steps": 2, **kwargs})
+        assert not (_stablewm_home / "checkpoints").exists() or not any((_stablewm_home / "checkpoints").iterdir())
+
+    return check
+
+
+def test_unknown_model_suggests_the_close_one(refused):
+    refused(UnknownNameError, r"'lewn'\. Did you mean 'lewm'\? Accepted: dummy, lewm, pldm", model="lewn")
+
+
+def test_unknown_dataset_lists_the_cached_ones(refused, toy):
+    refused(FileNotFoundError, rf"'tyo' \(.*tyo\.h5 does not exist\)\. Did you mean '{toy}'\? Datasets in .*: {toy}$", dataset="tyo")
+
+
+@pytest.mark.parametrize("missing", ["pixels", "action"])
+def test_dataset_without_a_needed_column(refused, write_dataset, missing):
+    kept = {"pixels": "action", "action": "pixels"}[missing]
+    name = write_dataset("partial", columns=(kept, "reward"))
+    refused(DatasetFormatError, rf"columns \['{missing}'\] in .*partial\.h5, got \['{kept}', 'reward'\]", dataset=name)
+
+
+def test_episodes_shorter_than_a_window(refused, write_dataset):
+    name = write_dataset("short", lengths=(2, 2, 2))  # lewm's windows are history 2 + 1 prediction = 3 rows
+    refused(DatasetFormatError, r"at least num_steps \* frameskip = 3 \* 1 = 3 steps, .*\(longest: 2\)", dataset=name)
+
+
+def test_images_with_other_channels_than_the_model(refused):
+    refused(ConfigError, r"requires 1-channel images, got 3 channels", image_mean=(0.5,), image_std=(0.5,))
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        (dict(precision="fp32"), r"precision in \('32', 'bf16', '16'\), got 'fp32'"),
+        (dict(precision="16"), r"CUDA device for precision 16, got cpu; use bf16 or 32"),
+        (dict(device="gpu"), r"device among auto, cpu, cuda, cuda:N, mps, got 'gpu'"),
+        (dict(steps=0), r"steps to be a positive int, got 0"),
+        (dict(batch_size=True), r"batch_size to be a positive int, got True"),
+        (dict(steps=None, epochs=-1.0), r"epochs > 0, got -1\.0"),
+        (dict(steps=4, epochs=1.0), r"steps or epochs, got both"),
+        (dict(seed=-1), r"seed to be an int >= 0, got -1"),
+        (dict(name="a/b"), r"plain run name \(no path\), got 'a/b'"),
+        (dict(embed_dims=8), r"no field 'embed_dims'\. Did you mean one of 'embed_dim'"),
+        (dict(preset="huge"), r"preset in \['paper', 'small', 'tiny'\], got 'huge'"),
+        (dict(lr=2.0), r"0 < lr < 1"),
+    ],
+    ids=lambda v: "-".join(f"{k}={v[k]}" for k in v) if isinstance(v, dict) else "",
+)
+def test_bad_arguments_are_config_errors(refused, kwargs, match):
+    refused(ConfigError, match, **kwargs)
+
+
+@pytest.mark.skipif(torch.cuda.is_available(), reason="needs a machine without CUDA")
+def test_cuda_without_a_gpu(refused):
+    refused(ConfigError, r"got 'cuda' but torch sees no CUDA GPU; use --device auto or cpu", device="cuda")
+
+
+def test_an_existing_run_needs_resume(fit, refused):
+    first = fit("dummy", "r", steps=1)
+    before = (first.folder / "weights.pt").read_bytes()
+    with pytest.raises(FileExistsError, match=r"Run folder .*/checkpoints/r exists: pass resume=True \(--resume\)"):
+        fit("dummy", "r", steps=1)
+    assert (first.folder / "weights.pt").read_bytes() == before
+
+
+def test_resume_needs_a_previous_run(refused):
+    refused(FileNotFoundError, r"requires a previous run with .*/checkpoints/r/train_state\.ckpt, which does not exist", resume=True)
+
+
+def test_resume_needs_the_same_number_of_steps(fit):
+    fit("dummy", "r", steps=4)
+    with pytest.raises(ConfigError, match=r"same number of steps as the run \(4\), got 6"):
+        fit("dummy", "r", steps=6, resume=True)

@@ -1,0 +1,95 @@
+"""``swm train``: what it prints on success, and its one-line errors (tiny dummy runs on the toy dataset)."""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+
+import pytest
+import torch
+
+from stable_worldmodel.train.data import TrainData
+from stable_worldmodel.wm import get_config
+
+#: a few steps of the dummy model on the CPU, frames one env step apart
+QUICK = ("--device", "cpu", "--frameskip", "1", "--batch-size", "8")
+
+
+def no_runs(home) -> bool:
+    return not (home / "checkpoints").exists() or not any((home / "checkpoints").iterdir())
+
+
+def test_train_prints_the_checkpoint_and_the_rate(swm, toy, _stablewm_home):
+    result = swm("train", "dummy", "--dataset", toy, "--steps", "5", "--name", "r", *QUICK)
+    assert result.exit_code == 0, result.output
+    assert result.stderr == ""  # no progress bar when stderr is not a terminal
+    summary, where = result.stdout.strip().splitlines()
+    match = re.fullmatch(
+        r"Trained dummy \(tiny\) on toy: 5 steps in \d+ s \((\d+) samples/s\), train loss (\d+\.\d{4}), val loss (\d+\.\d{4})", summary
+    )
+    assert match, summary
+    assert int(match[1]) > 0
+    folder = _stablewm_home / "checkpoints" / "r"
+    assert where == f"Checkpoint: {folder} (plan with: swm eval ENV --policy wm:r); loss curve: {folder / 'loss.png'}"
+
+    protocol = json.loads((folder / "protocol.json").read_text())
+    assert protocol["steps_done"] == 5 and protocol["frameskip"] == 1 and protocol["model"] == "dummy"
+    assert f"{protocol['final']['train_loss']:.4f}" == match[2] and f"{protocol['final']['val_loss']:.4f}" == match[3]
+    assert (folder / "weights.pt").is_file() and (folder / "loss.png").is_file()
+
+
+def test_a_second_run_of_that_name_needs_resume(swm, toy, error_line):
+    args = ("train", "dummy", "--dataset", toy, "--steps", "4", "--name", "r", *QUICK)
+    first = swm(*args)
+    assert first.exit_code == 0, first.output
+    again = swm(*args)
+    assert again.exit_code == 1
+    assert "checkpoints/r exists: pass resume=True (--resume)" in error_line(again)
+    resumed = swm(*args, "--resume")
+    assert resumed.exit_code == 0, resumed.output
+    loss = re.compile(r"train loss \d+\.\d{4}, val loss \d+\.\d{4}")
+    assert loss.search(resumed.stdout)[0] == loss.search(first.stdout)[0]
+
+
+def test_epochs_bound_the_run(swm, toy):
+    num_train = TrainData(toy, get_config("dummy", "tiny", frameskip=1), seed=0, device=torch.device("cpu")).num_train
+    result = swm("train", "dummy", "--dataset", toy, "--epochs", "1.5", "--name", "r", *QUICK)
+    assert result.exit_code == 0, result.output
+    assert f": {math.ceil(1.5 * num_train / 8)} steps in " in result.stdout
+
+
+def test_unknown_model_is_one_line_naming_the_close_one(swm, toy, error_line, _stablewm_home):
+    result = swm("train", "lewn", "--dataset", toy)
+    assert result.exit_code == 1
+    assert error_line(result) == "Error: Unknown world model 'lewn'. Did you mean 'lewm'? Accepted: dummy, lewm, pldm"
+    assert no_runs(_stablewm_home)
+
+
+def test_unknown_dataset_is_one_line_naming_the_cached_ones(swm, toy, error_line, _stablewm_home):
+    result = swm("train", "dummy", "--dataset", "tyo", "--steps", "2")
+    assert result.exit_code == 1
+    line = error_line(result)
+    assert "'tyo'" in line and f"Did you mean '{toy}'?" in line and line.endswith(f": {toy}")
+    assert no_runs(_stablewm_home)
+
+
+@pytest.mark.parametrize(
+    ("args", "code", "expected"),
+    [
+        (("--steps", "3", "--epochs", "1"), 1, "train requires steps or epochs, got both"),
+        (("--precision", "fp32"), 1, "precision in ('32', 'bf16', '16'), got 'fp32'"),
+        (("--device", "gpu"), 1, "device among auto, cpu, cuda, cuda:N, mps, got 'gpu'"),
+        (("--preset", "tiyn"), 1, "got 'tiyn'. Did you mean 'tiny'?"),
+        (("--steps", "0"), 2, "'--steps': expected an integer >= 1, got 0"),
+        (("--epochs", "0"), 2, "'--epochs': requires a number > 0, got '0'"),
+        (("--lr", "-1"), 2, "'--lr': requires a number > 0, got '-1'"),
+        (("--frameskip", "x"), 2, "'--frameskip'"),
+    ],
+    ids=lambda v: " ".join(v) if isinstance(v, tuple) else None,
+)
+def test_bad_values_are_one_line(swm, toy, error_line, _stablewm_home, args, code, expected):
+    result = swm("train", "dummy", "--dataset", toy, "--name", "r", *args)
+    assert result.exit_code == code
+    assert expected in error_line(result)
+    assert no_runs(_stablewm_home)
