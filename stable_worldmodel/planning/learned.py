@@ -92,8 +92,8 @@ def world_model_policy(
     dev = resolve_device(device)
     model, protocol = load_checkpoint(run, cache_dir)
     model = model.to(dev).eval()
-    for p in model.parameters():
-        p.requires_grad_(settings.solver == "gd")
+    for p in model.parameters():  # GD differentiates w.r.t. the actions only
+        p.requires_grad_(False)
     block = int(frameskip or protocol.get("frameskip", 1))
     config = PlanConfig(
         horizon=settings.horizon, receding_horizon=settings.receding_horizon or settings.horizon,

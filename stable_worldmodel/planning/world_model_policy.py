@@ -46,9 +46,10 @@ class WorldModelPolicy(BasePolicy):
     - Returns actions shaped like ``env.action_space`` ``(B, ...)``.
 
     The infos are passed with all their history frames: make the World's ``history_size``
-    equal to ``config.history_len``. When an env starts a new episode mid-plan (its
-    ``step_idx`` info is 0), every env replans without warm start, so no env acts on a plan
-    made for its previous episode; :meth:`reset_plan` forces a replan too.
+    equal to ``config.history_len``. When an env starts a new episode mid-plan or at a
+    plan's end (its ``step_idx`` info is 0), every env replans without warm start, so no env
+    acts on, or starts from, a plan made for its previous episode; :meth:`reset_plan` forces
+    a replan too.
     """
 
     def __init__(
@@ -106,7 +107,8 @@ class WorldModelPolicy(BasePolicy):
         env = self._require_env()
         if self.solver.n_envs is None:
             raise ConfigError("WorldModelPolicy requires set_env(env) before get_action (it configures the solver)")
-        if self._queue is None or self._pos >= self._queue.shape[1] or self._env_restarted(info_dict):
+        restarted = self._env_restarted(info_dict)  # first: at a plan boundary it still drops the warm start
+        if restarted or self._queue is None or self._pos >= self._queue.shape[1]:
             self._replan(info_dict, env)
         action = self._queue[:, self._pos]
         self._pos += 1
@@ -114,8 +116,8 @@ class WorldModelPolicy(BasePolicy):
 
     def _env_restarted(self, info_dict: Mapping[str, Any]) -> bool:
         """True when an env started a new episode since the last plan (its ``step_idx`` is 0
-        while the queue is part-used): its queued actions belong to the old episode, so
-        every env replans (without warm start)."""
+        after the policy acted on that plan, mid-plan or at its end): its queued actions and
+        the warm start belong to the old episode, so every env replans without warm start."""
         if self._pos == 0 or keys.STEP_IDX not in info_dict:
             return False
         step = np.asarray(info_dict[keys.STEP_IDX])

@@ -1,0 +1,174 @@
+"""``swm eval --policy wm:RUN``: planning with a checkpoint, its JSON record, the held-out dataset
+protocol (``--from-dataset``) and the one-line errors.
+
+One module fixture records a 16x16 toy dataset and trains a tiny LeWM for two steps (the
+model does not have to be good here); each test copies that cache into its own ``STABLEWM_HOME``.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from stable_worldmodel.cli.stats import wilson_interval
+from stable_worldmodel.errors import ConfigError
+
+TOY = "swm/Toy-v0"
+RUN = "toy-lewm"
+#: a tiny LeWM at 16x16; a quarter of the 12 episodes held out for validation
+TINY = dict(
+    image_size=16, embed_dim=16, cnn_width=8, depth=1, heads=2, dim_head=8, mlp_dim=32, projector_hidden=32,
+    sigreg_num_proj=32, batch_size=8, frameskip=1, val_fraction=0.25,
+)
+#: a small plan, on the CPU, with 16x16 images
+PLAN = ("--solver", "cem", "--samples", "16", "--iterations", "2", "--horizon", "3")
+SMALL = ("--device", "cpu", "--image-size", "16")
+
+
+@pytest.fixture(scope="module")
+def template(tmp_path_factory):
+    """A cache holding dataset ``toy`` (12 expert episodes) and checkpoint ``toy-lewm``."""
+    from stable_worldmodel import World
+    from stable_worldmodel.envs import expert_policy
+    from stable_worldmodel.train import train
+
+    root = tmp_path_factory.mktemp("stablewm_eval_wm")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("STABLEWM_HOME", str(root))
+        with World(TOY, 2, (16, 16), max_episode_steps=20, verbose=0, vectorization_mode="sync") as world:
+            world.set_policy(expert_policy(TOY))
+            world.record_dataset("toy", episodes=12, seed=0, cache_dir=root)
+        train("lewm", "toy", "tiny", steps=2, name=RUN, seed=0, device="cpu", progress=False, cache_dir=str(root),
+              **TINY)
+    return root
+
+
+@pytest.fixture
+def home(template, _stablewm_home):
+    """This test's ``STABLEWM_HOME``, holding a copy of the template cache."""
+    shutil.copytree(template, _stablewm_home, dirs_exist_ok=True)
+    return _stablewm_home
+
+
+def protocol(home) -> dict:
+    return json.loads((home / "checkpoints" / RUN / "protocol.json").read_text())
+
+
+def test_eval_wm_writes_success_rate_interval_seeds_and_plan(swm, home, tmp_path):
+    out = tmp_path / "results" / "out.json"
+    args = ("eval", TOY, "--policy", f"wm:{RUN}", "--episodes", "4", "--num-envs", "2", "--max-steps", "10", *PLAN, *SMALL)
+    result = swm(*args, "--json", str(out))
+    assert result.exit_code == 0, result.output
+    record = json.loads(out.read_text())
+
+    assert (record["env"], record["policy"], record["episodes"], record["num_envs"]) == (TOY, f"wm:{RUN}", 4, 2)
+    assert (record["protocol"], record["seeds"], record["max_steps"]) == ("seeds", [0, 3], 10)
+    successes = sum(record["episode_successes"])
+    assert len(record["episode_successes"]) == 4 and record["successes"] == successes
+    assert record["success_rate"] == pytest.approx(100 * successes / 4)
+    assert np.allclose(record["ci95"], [100 * v for v in wilson_interval(successes, 4)], atol=0.01)
+    assert 1 <= record["mean_length"] <= 10
+    assert record["plan"] == {
+        "solver": "cem", "horizon": 3, "receding_horizon": 3, "samples": 16, "iterations": 2, "topk": None, "seed": 0,
+    }
+    model = record["model"]
+    assert model["checkpoint"] == str(home / "checkpoints" / RUN)
+    assert (model["model"], model["preset"], model["dataset"], model["steps"]) == ("lewm", "tiny", "toy", 2)
+    assert (model["frameskip"], model["history_size"], model["image_size"]) == (1, 1, 16)
+
+    # the printed table agrees, and names the file
+    assert "swm/Toy-v0: seeds 0..3, at most 10 steps" in result.stdout
+    row = next(line for line in result.stdout.splitlines() if line.strip("│ ").startswith(f"wm:{RUN}"))
+    assert f"{record['success_rate']:.1f}%" in row
+    assert f"Results: {out}" in result.stdout
+
+
+def test_eval_wm_from_dataset_starts_from_held_out_episodes(swm, home, tmp_path, monkeypatch):
+    from stable_worldmodel.data import HDF5Dataset
+    from stable_worldmodel.world import World
+
+    steps = []
+    world_step = World.step
+
+    def counting_step(self):
+        steps.append(self.num_envs)
+        world_step(self)
+
+    monkeypatch.setattr(World, "step", counting_step)
+    out = tmp_path / "out.json"
+    args = ("eval", TOY, "--policy", f"wm:{RUN}", "--episodes", "3", "--num-envs", "2", *PLAN, *SMALL)
+    result = swm(*args, "--from-dataset", "toy", "--goal-offset", "2", "--budget", "4", "--json", str(out))
+    assert result.exit_code == 0, result.output
+    record = json.loads(out.read_text())
+
+    assert (record["protocol"], record["dataset"], record["goal_offset"], record["budget"]) == ("dataset", "toy", 2, 4)
+    assert record["held_out"] is True
+    val = protocol(home)["val_episodes"]
+    assert len(val) == 3 and set(record["episodes_idx"]) <= set(val)
+    lengths = HDF5Dataset("toy", preload=False).lengths
+    assert len(record["episodes_idx"]) == len(record["start_steps"]) == len(record["episode_successes"]) == 3
+    for episode, start in zip(record["episodes_idx"], record["start_steps"]):
+        assert 0 <= start and start + 2 < lengths[episode]  # the goal is a recorded state 2 steps later
+    assert len(set(zip(record["episodes_idx"], record["start_steps"]))) == 3  # no repeated start
+    # at most the budget: per episode, and per batch of 2 envs (3 episodes: 2 batches)
+    assert 1 <= record["mean_length"] <= 4
+    assert 1 <= len(steps) <= 2 * 4 and set(steps) == {2}
+    assert "swm/Toy-v0: 3 starts from toy (goal +2 steps, budget 4)" in result.stdout
+    assert "seeds" not in record
+
+
+def test_eval_random_from_dataset_uses_every_episode(swm, home, tmp_path):
+    out = tmp_path / "out.json"
+    result = swm("eval", TOY, "--episodes", "8", "--image-size", "16", "--from-dataset", "toy", "--goal-offset", "1",
+                 "--budget", "3", "--json", str(out))
+    assert result.exit_code == 0, result.output
+    record = json.loads(out.read_text())
+    assert record["held_out"] is False and "plan" not in record and "model" not in record
+    assert not set(record["episodes_idx"]) <= set(protocol(home)["val_episodes"])
+
+
+def test_eval_unknown_run_is_one_line_naming_where_checkpoints_are(swm, home, error_line):
+    result = swm("eval", TOY, "--policy", "wm:nosuchrun", "--episodes", "1")
+    assert result.exit_code == 1
+    line = error_line(result)
+    assert "'nosuchrun'" in line
+    assert str(home / "checkpoints") in line and RUN in line  # where it looked, and what is there
+
+
+@pytest.mark.parametrize(
+    "options, needles",
+    [
+        (("--solver", "cme"), ["'cme'", "Did you mean", "'cem'"]),
+        (("--horizon", "3", "--receding-horizon", "4"), ["receding_horizon", "horizon=3", "got 4"]),
+    ],
+    ids=["solver", "receding-horizon"],
+)
+def test_eval_bad_plan_settings_are_one_line(swm, home, error_line, options, needles):
+    result = swm("eval", TOY, "--policy", f"wm:{RUN}", "--episodes", "1", *options)
+    assert result.exit_code == 1
+    line = error_line(result)
+    for needle in needles:
+        assert needle in line, line
+    if options[0] == "--solver":  # 'cem' is the first suggestion
+        assert line.index("'cem'") < line.index("'icem'")
+
+
+# -- dataset_starts: the (episode, start) pairs of --from-dataset --------------------------------
+def test_dataset_starts_are_seeded_valid_and_distinct_while_possible():
+    from stable_worldmodel.cli.evaluation import dataset_starts
+
+    data = SimpleNamespace(lengths=np.array([3, 8, 6, 2]))
+    eps, starts = dataset_starts(data, 5, goal_offset=3, seed=1, pool=[0, 1, 2])
+    assert (eps, starts) == dataset_starts(data, 5, goal_offset=3, seed=1, pool=[0, 1, 2])
+    assert set(eps) <= {1, 2}  # episode 0 is too short for the offset, 3 is outside the pool
+    assert all(s + 3 < data.lengths[e] for e, s in zip(eps, starts))
+    assert len(set(zip(eps, starts))) == 5
+    # more starts than distinct pairs (5 + 3 = 8): every pair is used, then one repeats
+    eps, starts = dataset_starts(data, 9, goal_offset=3, seed=0, pool=[0, 1, 2])
+    assert len(eps) == 9 and len(set(zip(eps, starts))) == 8
+    with pytest.raises(ConfigError, match="--goal-offset 8"):
+        dataset_starts(data, 2, goal_offset=8, seed=0)

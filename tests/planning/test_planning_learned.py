@@ -1,0 +1,223 @@
+"""Planning with a learned world model: ``world_model_policy`` on checkpoints trained here on swm/Toy-v0.
+
+One module fixture records an expert dataset and trains two tiny LeWM runs on the CPU (a few
+seconds): ``lewm`` (frameskip 1, trained long enough to plan with) and ``lewm-fs2`` (frameskip
+2, a few steps: for the action-block bookkeeping only).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from stable_worldmodel import World, keys
+from stable_worldmodel.errors import ConfigError, UnknownNameError
+from stable_worldmodel.planning.learned import SOLVERS, PlanSettings, world_model_policy
+from stable_worldmodel.policy import RandomPolicy
+from stable_worldmodel.wm.preprocess import Normalizer
+
+TOY = "swm/Toy-v0"
+IMAGE = 16
+#: the goal disk painted in the background color: the pixels show only the agent. With the disk
+#: visible, a model trained for seconds spends its embedding on the (static) goal position and
+#: plans no better than random; the goal *image* still shows the agent at the goal.
+HIDDEN_GOAL = {keys.VARIATION_VALUES: {"goal.color": np.array([245, 245, 245], np.uint8)}}
+#: a width-8 CNN LeWM at 16x16 with a one-layer predictor
+TINY = dict(
+    image_size=IMAGE, embed_dim=16, cnn_width=8, depth=1, heads=2, dim_head=8, mlp_dim=32, projector_hidden=32,
+    sigreg_num_proj=256, batch_size=32, warmup_steps=10,
+)
+#: evaluation seeds, far from the recorded ones (0..159)
+EVAL_SEED = 10_000
+
+
+@pytest.fixture(scope="module")
+def home(tmp_path_factory):
+    """A cache with dataset ``toy`` (160 expert episodes, 16x16) and checkpoints ``lewm`` / ``lewm-fs2``."""
+    from stable_worldmodel.envs import expert_policy
+    from stable_worldmodel.train import train
+
+    root = tmp_path_factory.mktemp("stablewm_learned")
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)  # reproducible floats (the planner test depends on them), and fast on busy CPUs
+    try:
+        with pytest.MonkeyPatch.context() as mp:
+            mp.setenv("STABLEWM_HOME", str(root))
+            with World(TOY, 4, (IMAGE, IMAGE), max_episode_steps=20, verbose=0, vectorization_mode="sync") as world:
+                world.set_policy(expert_policy(TOY))
+                world.record_dataset("toy", episodes=160, seed=0, options=HIDDEN_GOAL, cache_dir=root)
+            common = dict(device="cpu", seed=0, progress=False, cache_dir=str(root), log_every=100)
+            train("lewm", "toy", "tiny", steps=400, name="lewm", frameskip=1, **common, **TINY)
+            train("lewm", "toy", "tiny", steps=2, name="lewm-fs2", frameskip=2, **common, **TINY)
+        yield root
+    finally:
+        torch.set_num_threads(threads)
+
+
+def toy_world(num_envs: int = 2, max_episode_steps: int = 30) -> World:
+    return World(TOY, num_envs, (IMAGE, IMAGE), max_episode_steps=max_episode_steps, verbose=0, seed=EVAL_SEED,
+                 vectorization_mode="sync")
+
+
+def make(home, run: str = "lewm", **settings):
+    """``(policy, protocol)`` of checkpoint ``run`` planning on the CPU with ``PlanSettings(**settings)``."""
+    return world_model_policy(run, PlanSettings(**settings), device="cpu", cache_dir=str(home))
+
+
+class SolveSpy:
+    """Records the ``init_action`` and the planned ``actions`` of every solve of ``policy.solver``."""
+
+    def __init__(self, policy, monkeypatch):
+        self.inits, self.plans = [], []
+        solve = policy.solver.solve
+
+        def spy(info, init_action=None):
+            result = solve(info, init_action=init_action)
+            self.inits.append(None if init_action is None else init_action.clone())
+            self.plans.append(result["actions"].clone())
+            return result
+
+        monkeypatch.setattr(policy.solver, "solve", spy)
+
+    def __len__(self) -> int:
+        return len(self.plans)
+
+
+def test_planning_with_the_trained_model_beats_random(home):
+    """CEM on the trained model vs the random policy on the same 32 seeds, goal disk hidden."""
+
+    def success_rate(policy) -> float:
+        with toy_world(num_envs=4) as world:
+            world.set_policy(policy)
+            return world.evaluate(episodes=32, seed=EVAL_SEED, options=HIDDEN_GOAL)["success_rate"]
+
+    policy, protocol = make(home, solver="cem", horizon=2, receding_horizon=1, samples=64, iterations=4)
+    assert protocol["model"] == "lewm" and protocol["dataset"] == "toy" and protocol["image_size"] == IMAGE
+    planned, random = success_rate(policy), success_rate(RandomPolicy(seed=0))
+    # checked by hand over training seeds 0-5 x eval seeds 1e4, 2e4, 3e4: planner 34-69%, random 9-16%
+    assert planned >= max(2 * random, random + 20), f"planner {planned:.1f}% vs random {random:.1f}%"
+
+
+@pytest.mark.parametrize("solver", SOLVERS)
+def test_every_solver_plans_and_encodes_context_and_goal_once_per_plan(home, solver, monkeypatch):
+    settings = dict(solver=solver, horizon=3, receding_horizon=2, samples=12, iterations=3)
+    policy, protocol = make(home, **settings)
+    encoder = policy.solver.model.encoder
+    encoded = []  # images per encoder call
+    forward = encoder.forward
+
+    def counting(pixels, **kwargs):
+        encoded.append(pixels.shape[0])
+        return forward(pixels, **kwargs)
+
+    monkeypatch.setattr(encoder, "forward", counting)
+    spy = SolveSpy(policy, monkeypatch)
+    norm = Normalizer.from_dict(protocol["normalizers"][keys.ACTION])
+    low, high = norm.transform(-np.ones((1, 2))).ravel(), norm.transform(np.ones((1, 2))).ravel()
+    with toy_world() as world:
+        world.set_policy(policy)
+        world.reset(seed=EVAL_SEED, options=HIDDEN_GOAL)
+        world.step()
+        # one plan of 3 iterations: the context (B * T = 2 frames) and the goal (2 frames), encoded once each
+        assert len(spy) == 1 and encoded == [2, 2]
+        plan = spy.plans[0]
+        assert plan.shape == (2, 3, 2)  # (B, H, A): normalized action blocks inside the mapped bounds
+        assert torch.isfinite(plan).all()
+        assert (plan.numpy() >= low - 1e-5).all() and (plan.numpy() <= high + 1e-5).all()
+        action = world.infos[keys.ACTION][:, -1]
+        assert action.shape == (2, 2) and action.dtype == np.float32 and world.action_space.contains(action)
+        assert np.allclose(action, np.clip(norm.inverse_transform(plan[:, 0].numpy()), -1, 1), atol=1e-6)
+        world.step()  # second action of the plan: no solve, no encoding
+        assert len(spy) == 1 and len(encoded) == 2
+        world.step()  # a new plan, encoded once more
+        assert len(spy) == 2 and encoded == [2, 2, 2, 2]
+    assert protocol["plan"] == PlanSettings(**settings).as_dict()
+    assert protocol["device"] == "cpu" and protocol["action_block"] == 1
+
+
+def test_receding_horizon_consumes_action_blocks_of_frameskip_steps(home, monkeypatch):
+    """H = 3 blocks of frameskip 2: the first R = 2 blocks (4 env steps) run, then a replan warm-started
+    with the last block."""
+    policy, protocol = make(home, "lewm-fs2", solver="cem", horizon=3, receding_horizon=2, samples=8, iterations=2)
+    assert protocol["action_block"] == 2 and policy.config.action_block == 2
+    assert policy.config.horizon == 3 and policy.config.receding_horizon == 2
+    spy = SolveSpy(policy, monkeypatch)
+    norm = Normalizer.from_dict(protocol["normalizers"][keys.ACTION])
+    taken = []
+    with toy_world() as world:
+        world.set_policy(policy)
+        assert policy.solver.action_dim == 4  # one block = 2 env actions of 2 numbers
+        world.reset(seed=EVAL_SEED, options=HIDDEN_GOAL)
+        for _ in range(9):
+            world.step()
+            taken.append(world.infos[keys.ACTION][:, -1].copy())
+    assert len(spy) == 3  # env steps 0, 4 and 8
+    for k in range(2):
+        plan = spy.plans[k].numpy()  # (B, H, 4)
+        first = norm.inverse_transform(plan[:, :2].reshape(-1, 2)).reshape(2, 4, 2)  # 2 blocks -> 4 env steps
+        assert np.allclose(np.stack(taken[4 * k : 4 * k + 4], axis=1), np.clip(first, -1, 1), atol=1e-6)
+    assert spy.inits[0] is None
+    assert spy.inits[1].shape == (2, 1, 4) and torch.equal(spy.inits[1], spy.plans[0][:, 2:])
+    assert torch.equal(spy.inits[2], spy.plans[1][:, 2:])
+
+
+@pytest.mark.parametrize("receding", [3, 1], ids=["mid-plan", "plan-boundary"])
+def test_an_env_restarting_replans_every_env_without_warm_start(home, monkeypatch, receding):
+    """Env 1 starts a new episode (its step_idx is 0) after one step of a 4-block plan: every env
+    replans from scratch, and acts on the new plan from its first block."""
+    policy, protocol = make(home, solver="cem", horizon=4, receding_horizon=receding, samples=8, iterations=2)
+    norm = Normalizer.from_dict(protocol["normalizers"][keys.ACTION])
+    spy = SolveSpy(policy, monkeypatch)
+    with toy_world() as world:
+        world.set_policy(policy)
+        world.reset(seed=EVAL_SEED, options=HIDDEN_GOAL)
+        world.step()
+        world.reset_envs([1], seeds=[EVAL_SEED + 7], options=HIDDEN_GOAL)
+        assert world.infos[keys.STEP_IDX][:, -1].tolist() == [1, 0]
+        world.step()
+        assert len(spy) == 2 and spy.inits[1] is None
+        first = np.clip(norm.inverse_transform(spy.plans[1][:, 0].numpy()), -1, 1)
+        assert np.allclose(world.infos[keys.ACTION][:, -1], first, atol=1e-6)
+        world.step()  # no restart: the new plan goes on (or, at R = 1, a warm-started replan)
+        assert len(spy) == 2 + (receding == 1)
+        if receding == 1:
+            assert torch.equal(spy.inits[2], spy.plans[1][:, 1:])
+
+
+def test_a_new_evaluation_does_not_start_from_the_previous_plan(home, monkeypatch):
+    """World.evaluate resets every env: the warm start left by an earlier rollout is dropped."""
+    policy, _ = make(home, solver="cem", horizon=4, receding_horizon=3, samples=8, iterations=1)
+    spy = SolveSpy(policy, monkeypatch)
+    with toy_world(max_episode_steps=3) as world:
+        world.set_policy(policy)
+        world.evaluate(episodes=2, seed=EVAL_SEED, options=HIDDEN_GOAL)  # the 3 steps of one plan
+        assert len(spy) == 1
+        world.evaluate(episodes=2, seed=EVAL_SEED + 2, options=HIDDEN_GOAL)
+        assert len(spy) == 2 and spy.inits[1] is None
+
+
+# -- PlanSettings ------------------------------------------------------------------------------------
+def test_plan_settings_unknown_solver_suggests_the_close_names():
+    with pytest.raises(UnknownNameError) as info:
+        PlanSettings(solver="cme")
+    message = str(info.value)
+    assert isinstance(info.value, KeyError) and "'cme'" in message
+    assert "Did you mean" in message and message.index("'cem'") < message.index("'icem'")
+    assert "Accepted: cem, gd, icem, mppi, random" in message
+
+
+@pytest.mark.parametrize(
+    "field, value", [("horizon", 0), ("samples", -3), ("iterations", 0), ("horizon", 2.5), ("samples", True)]
+)
+def test_plan_settings_sizes_must_be_positive_ints(field, value):
+    with pytest.raises(ConfigError, match=f"PlanSettings requires {field} to be a positive int, got {value!r}"):
+        PlanSettings(**{field: value})
+
+
+def test_plan_settings_receding_horizon_is_within_the_horizon():
+    with pytest.raises(ConfigError, match="receding_horizon <= horizon=3, got 4"):
+        PlanSettings(horizon=3, receding_horizon=4)
+    with pytest.raises(ConfigError, match="got 0"):
+        PlanSettings(receding_horizon=0)
+    assert PlanSettings(horizon=3).as_dict()["receding_horizon"] == 3  # default: the whole plan
