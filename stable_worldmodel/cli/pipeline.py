@@ -81,9 +81,10 @@ def eval_cmd(
     image_size: ImageSizeOpt = 64,
     solver: Annotated[str, typer.Option("--solver", metavar="NAME", help="Planner of wm: policies: cem, icem, mppi, gd or random.")] = "cem",
     horizon: Annotated[int, typer.Option("--horizon", parser=int_in(1), metavar="H", help="Planned action blocks (wm: policies).")] = 5,
-    receding_horizon: Annotated[int | None, typer.Option("--receding-horizon", parser=int_in(1), metavar="R", help="Blocks executed before replanning (default: all H).", show_default=False)] = None,
+    receding_horizon: Annotated[int, typer.Option("--receding-horizon", parser=int_in(1), metavar="R", help="Blocks executed before replanning (MPC; at most H).")] = 1,
     samples: Annotated[int, typer.Option("--samples", parser=int_in(1), metavar="S", help="Candidates per solver iteration.")] = 300,
     iterations: Annotated[int, typer.Option("--iterations", parser=int_in(1), metavar="K", help="Solver iterations per plan.")] = 30,
+    cost: Annotated[str, typer.Option("--cost", metavar="C", help="min: the predicted step closest to the goal counts (reach it at any step); final: the last one (upstream's).")] = "min",
     device: Annotated[str, typer.Option("--device", metavar="DEV", help="Where wm: policies plan: auto, cpu, cuda, mps.")] = "auto",
     json_path: Annotated[Path | None, typer.Option("--json", metavar="FILE", help="Write success rate, 95% CI, episodes, seeds and the protocol as JSON.", dir_okay=False)] = None,
     from_dataset: Annotated[str | None, typer.Option("--from-dataset", metavar="NAME", help="Start from held-out episodes of this dataset (upstream's protocol).", show_default=False)] = None,
@@ -104,7 +105,7 @@ def eval_cmd(
     if policy.startswith("wm:"):
         from ..planning.learned import PlanSettings
 
-        plan = PlanSettings(solver=solver, horizon=horizon, receding_horizon=receding_horizon, samples=samples, iterations=iterations, seed=seed)
+        plan = PlanSettings(solver=solver, horizon=horizon, receding_horizon=receding_horizon, samples=samples, iterations=iterations, seed=seed, cost=cost)
     max_steps = episode_limit(env, max_steps)
     out = console()
     summary, title, record = evaluate_cli(

@@ -22,19 +22,27 @@ logger = logging.getLogger(__name__)
 __all__ = ["PlanSettings", "world_model_policy"]
 
 SOLVERS = ("cem", "icem", "mppi", "gd", "random")
+#: goal costs of the models (``stable_worldmodel.wm.jepa.GOAL_COSTS``): the last prediction's
+#: distance to the goal (upstream's), or the closest prediction's (reaching the goal at any step)
+COSTS = ("final", "min")
 
 
 @dataclass(frozen=True)
 class PlanSettings:
-    """How to plan: solver name, horizon (blocks), receding horizon, samples, iterations, seed."""
+    """How to plan: solver name, horizon (blocks), receding horizon (blocks executed before
+    replanning: 1 by default, ``None`` for the whole plan), samples, iterations, seed,
+    and ``cost``: ``"min"`` scores a candidate by its predicted embedding closest to the goal's
+    (the goal may be reached before the horizon ends; the default), ``"final"`` by the last one
+    (upstream's ``criterion``)."""
 
     solver: str = "cem"
     horizon: int = 5
-    receding_horizon: int | None = None
+    receding_horizon: int | None = 1
     samples: int = 300
     iterations: int = 30
     topk: int | None = None
     seed: int = 0
+    cost: str = "min"
     extra: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -42,6 +50,10 @@ class PlanSettings:
             from ..errors import unknown_name
 
             raise unknown_name("planning solver", self.solver, SOLVERS)
+        if self.cost not in COSTS:
+            from ..errors import unknown_name
+
+            raise unknown_name("goal cost", self.cost, COSTS)
         for name in ("horizon", "samples", "iterations"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
@@ -53,7 +65,8 @@ class PlanSettings:
     def as_dict(self) -> dict[str, Any]:
         return {
             "solver": self.solver, "horizon": self.horizon, "receding_horizon": self.receding_horizon or self.horizon,
-            "samples": self.samples, "iterations": self.iterations, "topk": self.topk, "seed": self.seed, **self.extra,
+            "samples": self.samples, "iterations": self.iterations, "topk": self.topk, "seed": self.seed, "cost": self.cost,
+            **self.extra,
         }
 
 
@@ -94,6 +107,10 @@ def world_model_policy(
     model = model.to(dev).eval()
     for p in model.parameters():  # GD differentiates w.r.t. the actions only
         p.requires_grad_(False)
+    if not hasattr(model, "goal_cost") and settings.cost != "final":
+        raise ConfigError(f"PlanSettings(cost={settings.cost!r}) requires a model with goal_cost, got {type(model).__name__}; use cost='final'")
+    if hasattr(model, "goal_cost"):
+        model.goal_cost = settings.cost
     block = int(frameskip or protocol.get("frameskip", 1))
     config = PlanConfig(
         horizon=settings.horizon, receding_horizon=settings.receding_horizon or settings.horizon,

@@ -24,7 +24,8 @@ class DummyWorldModel(nn.Module):
       ``(..., *image_shape)`` (numpy arrays are converted).
     - ``predict(obs, actions)``: one step for a tensor ``(N, A)``, several for a list of them.
     - ``rollout(info, candidates (B, S, H, A))`` adds ``predicted_emb (B, S, H + 1, 10)``;
-      ``get_cost`` is the squared distance of the last one to the goal embedding ``(B, S)``.
+      ``get_cost`` is the squared distance of the last one (``goal_cost="final"``) or of the
+      closest one (``"min"``) to the goal embedding ``(B, S)``.
     - ``loss(batch)``: next-embedding MSE on ``pixels (B, T, ...)`` / ``action (B, T, A)``.
     """
 
@@ -33,6 +34,7 @@ class DummyWorldModel(nn.Module):
         self.image_shape, self.action_dim = tuple(int(v) for v in image_shape), int(action_dim)
         self.encoder = nn.Linear(int(np.prod(self.image_shape)), 10)
         self.predictor = nn.Linear(10 + self.action_dim, 10)
+        self.goal_cost = "final"  # or "min" (see stable_worldmodel.wm.jepa.GOAL_COSTS); set by planning
 
     def _embed(self, pixels: Any) -> torch.Tensor:
         if isinstance(pixels, np.ndarray):
@@ -86,9 +88,11 @@ class DummyWorldModel(nn.Module):
             goal = goal[:, 0] if goal.ndim == len(self.image_shape) + 3 else goal
             info["goal_emb"] = self._embed(goal)[:, -1]
         self.rollout(info, candidates)
-        final = info["predicted_emb"][..., -1, :]  # (B, S, 10) or (B, 10)
-        goal = info["goal_emb"] if final.ndim == 2 else info["goal_emb"].unsqueeze(1)
-        return (final - goal).square().sum(-1)
+        pred = info["predicted_emb"]  # (B, S, H + 1, 10) or (B, H + 1, 10)
+        goal = info["goal_emb"] if pred.ndim == 3 else info["goal_emb"].unsqueeze(1)
+        if self.goal_cost == "final":
+            return (pred[..., -1, :] - goal).square().sum(-1)
+        return (pred[..., 1:, :] - goal.unsqueeze(-2)).square().sum(-1).amin(-1)  # "min": the closest step
 
     def loss(self, batch: dict) -> dict:
         emb = self._embed(batch[keys.PIXELS])  # (B, T, 10)

@@ -32,6 +32,10 @@ __all__ = ["JEPA", "EMB", "ACT_EMB", "GOAL_EMB", "PREDICTED_EMB"]
 
 EMB, ACT_EMB, GOAL_EMB, PREDICTED_EMB = "emb", "act_emb", "goal_emb", "predicted_emb"
 
+#: how :meth:`JEPA.criterion` scores a rollout against the goal: ``final`` (upstream's: the last
+#: predicted embedding) or ``min`` (the closest predicted embedding: reaching the goal at any step)
+GOAL_COSTS = ("final", "min")
+
 
 def _require(info: dict, key: str, who: str) -> Any:
     if key not in info:
@@ -65,6 +69,7 @@ class JEPA(nn.Module):
         self.projector = projector or nn.Identity()
         self.pred_proj = pred_proj or nn.Identity()
         self.extra_config = dict(kwargs)
+        self.goal_cost = "final"  # see GOAL_COSTS; set by planning, not saved
 
     # -- sizes --------------------------------------------------------------------------------
     @property
@@ -148,11 +153,19 @@ class JEPA(nn.Module):
         return info
 
     def criterion(self, info: dict) -> torch.Tensor:
-        """Squared distance between the last predicted embedding and the last goal embedding: ``(B, S)``."""
-        pred = info[PREDICTED_EMB][..., -1, :]  # (B, S, D)
+        """Squared distance to the last goal embedding of the last predicted embedding
+        (``goal_cost == "final"``, upstream's) or of the closest predicted one (``"min"``): ``(B, S)``."""
         goal = info[GOAL_EMB]
         goal = goal[:, :, -1] if goal.ndim == 4 else goal[:, -1].unsqueeze(1)  # (B, S or 1, D)
-        return (pred - goal).square().sum(-1)
+        pred = info[PREDICTED_EMB]
+        if self.goal_cost == "final":
+            return (pred[..., -1, :] - goal).square().sum(-1)
+        if self.goal_cost != "min":
+            from ..errors import unknown_name
+
+            raise unknown_name("goal cost", self.goal_cost, GOAL_COSTS)
+        t = info[EMB].shape[-2]  # the context frames are not predictions
+        return (pred[..., t:, :] - goal.unsqueeze(-2)).square().sum(-1).amin(-1)
 
     def get_cost(self, info: dict, action_candidates: torch.Tensor) -> torch.Tensor:
         """Cost of ``action_candidates: (B, S, H, A)`` (normalized action blocks) to reach ``info["goal"]``: ``(B, S)``."""

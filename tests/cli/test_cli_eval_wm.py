@@ -73,7 +73,8 @@ def test_eval_wm_writes_success_rate_interval_seeds_and_plan(swm, home, tmp_path
     assert np.allclose(record["ci95"], [100 * v for v in wilson_interval(successes, 4)], atol=0.01)
     assert 1 <= record["mean_length"] <= 10
     assert record["plan"] == {
-        "solver": "cem", "horizon": 3, "receding_horizon": 3, "samples": 16, "iterations": 2, "topk": None, "seed": 0,
+        "solver": "cem", "horizon": 3, "receding_horizon": 1, "samples": 16, "iterations": 2, "topk": None, "seed": 0,
+        "cost": "min",
     }
     model = record["model"]
     assert model["checkpoint"] == str(home / "checkpoints" / RUN)
@@ -144,8 +145,9 @@ def test_eval_unknown_run_is_one_line_naming_where_checkpoints_are(swm, home, er
     [
         (("--solver", "cme"), ["'cme'", "Did you mean", "'cem'"]),
         (("--horizon", "3", "--receding-horizon", "4"), ["receding_horizon", "horizon=3", "got 4"]),
+        (("--cost", "mni"), ["goal cost 'mni'", "Did you mean 'min'", "final"]),
     ],
-    ids=["solver", "receding-horizon"],
+    ids=["solver", "receding-horizon", "cost"],
 )
 def test_eval_bad_plan_settings_are_one_line(swm, home, error_line, options, needles):
     result = swm("eval", TOY, "--policy", f"wm:{RUN}", "--episodes", "1", *options)
@@ -155,6 +157,15 @@ def test_eval_bad_plan_settings_are_one_line(swm, home, error_line, options, nee
         assert needle in line, line
     if options[0] == "--solver":  # 'cem' is the first suggestion
         assert line.index("'cem'") < line.index("'icem'")
+
+
+def test_eval_final_cost_and_whole_plan_are_recorded(swm, home, tmp_path):
+    out = tmp_path / "out.json"
+    args = ("eval", TOY, "--policy", f"wm:{RUN}", "--episodes", "2", "--num-envs", "2", "--max-steps", "6", *PLAN, *SMALL)
+    result = swm(*args, "--cost", "final", "--receding-horizon", "3", "--json", str(out))
+    assert result.exit_code == 0, result.output
+    plan = json.loads(out.read_text())["plan"]
+    assert (plan["cost"], plan["receding_horizon"]) == ("final", 3)
 
 
 # -- dataset_starts: the (episode, start) pairs of --from-dataset --------------------------------

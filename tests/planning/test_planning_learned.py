@@ -220,4 +220,14 @@ def test_plan_settings_receding_horizon_is_within_the_horizon():
         PlanSettings(horizon=3, receding_horizon=4)
     with pytest.raises(ConfigError, match="got 0"):
         PlanSettings(receding_horizon=0)
-    assert PlanSettings(horizon=3).as_dict()["receding_horizon"] == 3  # default: the whole plan
+    assert PlanSettings(horizon=3).as_dict()["receding_horizon"] == 1  # default: MPC, replan after every block
+    assert PlanSettings(horizon=3, receding_horizon=None).as_dict()["receding_horizon"] == 3  # None: the whole plan
+
+
+def test_plan_settings_cost_is_checked_and_reaches_the_model(home):
+    with pytest.raises(UnknownNameError, match="Unknown goal cost 'mni'. Did you mean 'min'"):
+        PlanSettings(cost="mni")
+    assert PlanSettings().cost == "min"
+    for cost in ("final", "min"):
+        policy, protocol = make(home, solver="cem", horizon=2, samples=8, iterations=1, cost=cost)
+        assert policy.solver.model.goal_cost == cost and protocol["plan"]["cost"] == cost

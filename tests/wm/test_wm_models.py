@@ -260,3 +260,33 @@ def test_training_lowers_the_loss(make_model, dot_data, name, overrides):
     first, last = np.mean(losses[:3]), np.mean(losses[-5:])
     assert np.isfinite(losses).all()
     assert last < 0.7 * first, f"{name}: loss {first:.4f} -> {last:.4f}"
+
+
+# -- goal costs ------------------------------------------------------------------------------
+def check_min_cost_is_the_closest_step(model):
+    info = {keys.PIXELS: images(2, 1), keys.GOAL: images(2, 1, seed=9)}
+    cand = randn(2, 3, 4, A)
+    with torch.inference_mode():
+        final = model.get_cost(info, cand)
+        pred, goal = info["predicted_emb"], info["goal_emb"]
+        model.goal_cost = "min"
+        best = model.get_cost(info, cand)
+    goal = {4: lambda g: g[:, 0, -1], 3: lambda g: g[:, -1], 2: lambda g: g}[goal.ndim](goal)  # (B, D)
+    per_step = (pred[:, :, 1:] - goal[:, None, None]).square().sum(-1)  # (B, S, H): after 1..H action blocks
+    assert_close(final, per_step[..., -1])
+    assert_close(best, per_step.amin(-1))
+    assert bool((best <= final + 1e-6).all()) and bool((best < final - 1e-6).any())
+
+
+def test_goal_cost_min_is_the_closest_predicted_step(jepa):
+    check_min_cost_is_the_closest_step(jepa)
+
+
+def test_dummy_goal_cost_min_is_the_closest_predicted_step(dummy):
+    check_min_cost_is_the_closest_step(dummy)
+
+
+def test_unknown_goal_cost_is_named(jepa):
+    jepa.goal_cost = "mean"
+    with pytest.raises(KeyError, match="Unknown goal cost 'mean'.*final, min"):
+        jepa.get_cost({keys.PIXELS: images(2, 1), keys.GOAL: images(2, 1)}, randn(2, 3, 4, A))
