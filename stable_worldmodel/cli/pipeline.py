@@ -40,6 +40,7 @@ def collect(
     variation: VariationOpt = None,
     max_steps: MaxStepsOpt = None,
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing dataset of that name instead of appending.")] = False,
+    noise: Annotated[float | None, typer.Option("--noise", min=0.0, metavar="SIGMA", help="Std of the Gaussian noise on the expert's actions (default: 1.0 for experts that take noise, so the data shows what varied actions do; 0 records clean demonstrations).", show_default=False)] = None,
 ) -> None:
     """Record EPISODES episodes of ENV into an HDF5 dataset in the cache, then show it.
 
@@ -48,10 +49,12 @@ def collect(
     from ..data import dataset_info, delete_dataset
     from ..data.utils import resolve_dataset_path
     from .display import console, display_dataset_info
-    from .worlds import check_factors, check_policy, make_policy, make_world, reset_options, resolve_env
+    from .worlds import COLLECT_NOISE, check_factors, check_policy, expert_takes_noise, make_policy, make_world, reset_options, resolve_env
 
     env = resolve_env(env)
     policy = check_policy(policy)
+    if noise is None and policy == "expert" and expert_takes_noise(env):
+        noise = COLLECT_NOISE
     name = name or default_dataset_name(env, policy)
     require(bool(name.strip()) and "/" not in name and "\\" not in name, f"swm collect requires a plain dataset name (no path), got {name!r}")
     path = resolve_dataset_path(name)
@@ -63,10 +66,11 @@ def collect(
             out.print(f"Dataset [bold]{name}[/] exists: appending {episodes} episodes (--overwrite replaces it).", soft_wrap=True)
     with make_world(env, num_envs=num_envs, image_size=image_size, max_steps=max_steps, seed=seed) as world:
         options = reset_options(check_factors(world, variation or []))
-        world.set_policy(make_policy(policy, env, seed=seed))
+        world.set_policy(make_policy(policy, env, seed=seed, noise=noise or None))
         path = world.record_dataset(name, episodes=episodes, seed=seed, options=options)
     display_dataset_info(dataset_info(name))
-    out.print(f"Recorded {episodes} {policy} episodes of {env} to {path}", soft_wrap=True)
+    how = f" (action noise {noise:g})" if noise else ""
+    out.print(f"Recorded {episodes} {policy} episodes{how} of {env} to {path}", soft_wrap=True)
 
 
 def eval_cmd(

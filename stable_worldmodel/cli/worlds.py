@@ -49,14 +49,35 @@ def check_policy(name: str) -> str:
     return check_choice("policy", name, [*POLICIES, "wm:<run>"])
 
 
-def make_policy(name: str, env_id: str, seed: int | None = None, plan: Any = None, device: str = "auto") -> Any:
-    """A fresh batched policy: ``random`` (seeded with ``seed``), the env's scripted ``expert``,
-    or ``wm:<run>`` planning with checkpoint ``<run>`` (``plan``: a
-    :class:`~stable_worldmodel.planning.learned.PlanSettings`)."""
+#: action noise of an expert recording a dataset (``swm collect``), for experts that take
+#: ``noise``: world models learn what actions do only from actions that vary
+COLLECT_NOISE = 1.0
+
+
+def expert_takes_noise(env_id: str) -> bool:
+    """Whether the scripted expert of ``env_id`` takes a ``noise`` argument (Gaussian action noise)."""
+    import inspect
+
+    from ..envs import get_entry, load_object
+
+    expert = get_entry(env_id).expert
+    return expert is not None and "noise" in inspect.signature(load_object(expert)).parameters
+
+
+def make_policy(
+    name: str, env_id: str, seed: int | None = None, plan: Any = None, device: str = "auto", noise: float | None = None
+) -> Any:
+    """A fresh batched policy: ``random`` (seeded with ``seed``), the env's scripted ``expert``
+    (with Gaussian action ``noise`` of that std, seeded, when given), or ``wm:<run>`` planning
+    with checkpoint ``<run>`` (``plan``: a :class:`~stable_worldmodel.planning.learned.PlanSettings`)."""
     from ..envs import expert_policy
     from ..policy import RandomPolicy
 
     name = check_policy(name)
+    if noise is not None and (name != "expert" or not expert_takes_noise(env_id)):
+        from ..errors import ConfigError
+
+        raise ConfigError(f"--noise requires the expert policy of an env whose expert takes action noise, got policy {name!r} on {env_id}")
     if name.startswith(WM_PREFIX):
         from ..planning.learned import PlanSettings, world_model_policy
 
@@ -64,7 +85,7 @@ def make_policy(name: str, env_id: str, seed: int | None = None, plan: Any = Non
         return world_model_policy(name[len(WM_PREFIX) :], settings, device=device)[0]
     if name == "random":
         return RandomPolicy(seed=seed)
-    return expert_policy(env_id)
+    return expert_policy(env_id) if noise is None else expert_policy(env_id, noise=noise, seed=seed)
 
 
 def check_factors(world: World, factors: Sequence[str]) -> list[str]:

@@ -55,6 +55,33 @@ def test_collect_seed_is_reproducible(swm):
     np.testing.assert_array_equal(a.get_col_data("state"), b.get_col_data("state"))
 
 
+def _actions(name: str) -> np.ndarray:
+    actions = HDF5Dataset(name).get_col_data("action")
+    return actions[~np.isnan(actions).any(axis=1)]
+
+
+def test_collect_expert_adds_seeded_action_noise_where_the_expert_takes_it(swm):
+    room = ("swm/TwoRoom-v1", "--policy", "expert", "-n", "4", "--num-envs", "2", *SMALL)
+    for name, extra in (("noisy", ()), ("again", ()), ("clean", ("--noise", "0")), ("half", ("--noise", "0.5"))):
+        result = swm("collect", *room, "--name", name, "--seed", "1", *extra)
+        assert result.exit_code == 0, result.output
+    assert "(action noise 1)" in swm("collect", *room, "--name", "n2", "--seed", "2").stdout
+    noisy, clean, half = _actions("noisy"), _actions("clean"), _actions("half")
+    np.testing.assert_array_equal(noisy, _actions("again"))  # seeded
+    distinct = [len(np.unique(np.round(a, 2), axis=0)) / len(a) for a in (clean, half, noisy)]
+    assert distinct[0] < 0.5 < distinct[1] and distinct[2] > 0.5  # the clean controller repeats a few commands
+    assert all(dataset_info(n)["num_episodes"] == 4 for n in ("noisy", "clean", "half"))  # the noisy expert still ends its episodes
+
+
+def test_collect_noise_needs_an_expert_that_takes_it(swm, error_line):
+    for args in (("swm/PushT-v1", "--policy", "expert"), (TOY, "--policy", "random")):
+        result = swm("collect", *args, "--noise", "0.3", "-n", "1", *SMALL)
+        assert result.exit_code == 1
+        line = error_line(result)
+        assert "--noise requires the expert policy" in line and args[0] in line
+    assert list_datasets() == []
+
+
 @pytest.mark.parametrize(
     ("args", "needles"),
     [
