@@ -169,3 +169,13 @@ def test_rich_handler_is_installed_once(swm):
             if handler not in before:
                 logger.removeHandler(handler)
         logger.setLevel(level)
+
+
+@pytest.mark.parametrize("preset, expected", [(None, "PASSIVE"), ("ACTIVE", "ACTIVE")])
+def test_main_makes_openmp_threads_wait_passively_unless_told(monkeypatch, capsys, preset, expected):
+    if preset is None:
+        monkeypatch.delenv("OMP_WAIT_POLICY", raising=False)
+    else:
+        monkeypatch.setenv("OMP_WAIT_POLICY", preset)
+    assert cli.main(["--version"]) == 0
+    assert app_module.os.environ["OMP_WAIT_POLICY"] == expected
