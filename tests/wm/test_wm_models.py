@@ -290,3 +290,17 @@ def test_unknown_goal_cost_is_named(jepa):
     jepa.goal_cost = "mean"
     with pytest.raises(KeyError, match="Unknown goal cost 'mean'.*final, min"):
         jepa.get_cost({keys.PIXELS: images(2, 1), keys.GOAL: images(2, 1)}, randn(2, 3, 4, A))
+
+
+def test_single_token_attention_shortcut_equals_full_attention():
+    from stable_worldmodel.wm.lewm.module import Attention
+
+    torch.manual_seed(0)
+    attn = Attention(8, heads=2, dim_head=4).eval()
+    x = torch.randn(5, 1, 8)
+    q, k, v = attn.to_qkv(attn.norm(x)).chunk(3, dim=-1)
+    heads = lambda t: t.view(5, 1, 2, 4).transpose(1, 2)  # noqa: E731
+    full = torch.nn.functional.scaled_dot_product_attention(heads(q), heads(k), heads(v), is_causal=True)
+    expected = attn.to_out(full.transpose(1, 2).reshape(5, 1, 8))
+    assert_close(attn(x), expected)
+    assert attn(torch.randn(5, 3, 8)).shape == (5, 3, 8)  # longer sequences take the full path
