@@ -16,7 +16,9 @@ class LeWMConfig(JEPAConfig):
     ``sigreg_num_proj`` (random directions of SIGReg).
 
     Presets: ``tiny`` (64x64, CNN, D=64, 2 predictor layers: trains on a laptop CPU in
-    minutes), ``small`` (64x64, a 6-layer ViT with patch 8, D=192: a GPU in an hour) and
+    minutes; SIGReg weight 0.01 and 256 directions: on TwoRoom, 0.09 made the latent distance
+    to a far goal say little about the true one and CEM reached 30% of goals, 0.01 reached
+    53-67%, 0.003 20%), ``small`` (64x64, a 6-layer ViT with patch 8, D=192: a GPU in an hour) and
     ``paper`` (upstream's recipe: ViT-tiny patch 14 at 224x224, predictor depth 6 with 16
     heads, projectors of width 2048, batch 128, lr 5e-5).
     """
@@ -24,7 +26,7 @@ class LeWMConfig(JEPAConfig):
     model_name: ClassVar[str] = "lewm"
     target: ClassVar[str] = "stable_worldmodel.wm.lewm.LeWM"
     presets: ClassVar[dict[str, dict[str, Any]]] = {
-        "tiny": {"sigreg_num_proj": 256},
+        "tiny": {"sigreg_num_proj": 256, "sigreg_weight": 0.01},
         "small": {
             "encoder": "vit", "vit_size": "tiny", "patch_size": 8, "vit_overrides": {"num_hidden_layers": 6},
             "embed_dim": 192, "depth": 4, "heads": 8, "dim_head": 32, "mlp_dim": 768, "projector_hidden": 1024,
