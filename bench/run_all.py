@@ -17,6 +17,7 @@ SCRIPTS = [
     ("bench_data.py", []),
     ("bench_solvers.py", []),
     ("bench_expert_success.py", []),
+    ("bench_wm.py", []),  # ours vs upstream 0.1.1 when ../peer011-venv exists
 ]
 
 
