@@ -115,7 +115,7 @@ def demo(
     from ..data import dataset_info, delete_dataset
     from ..data.utils import resolve_dataset_path
     from .display import console, display_dataset_info, success_table
-    from .worlds import COLLECT_NOISE, episode_limit, evaluate_policy, expert_takes_noise, make_policy, make_world, resolve_env
+    from .worlds import episode_limit, evaluate_policy, make_policy, make_world, recording_noise, resolve_env
 
     env = resolve_env(env)
     max_steps = episode_limit(env, max_steps)
@@ -137,8 +137,7 @@ def demo(
     if resolve_dataset_path(name).exists():
         delete_dataset(name)
     with make_world(env, min(4, episodes), image_size, max_steps, seed=seed) as world:
-        noise = COLLECT_NOISE if expert_takes_noise(env) else None  # as swm collect: data that shows varied actions
-        world.set_policy(make_policy("expert", env, seed=seed, noise=noise))
+        world.set_policy(make_policy("expert", env, seed=seed, noise=recording_noise("expert", env, None)))  # as swm collect
         dataset = world.record_dataset(name, episodes=episodes, seed=seed)
     display_dataset_info(dataset_info(name))
 

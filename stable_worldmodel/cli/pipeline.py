@@ -49,12 +49,11 @@ def collect(
     from ..data import dataset_info, delete_dataset
     from ..data.utils import resolve_dataset_path
     from .display import console, display_dataset_info
-    from .worlds import COLLECT_NOISE, check_factors, check_policy, expert_takes_noise, make_policy, make_world, reset_options, resolve_env
+    from .worlds import check_factors, check_policy, make_policy, make_world, recording_noise, reset_options, resolve_env
 
     env = resolve_env(env)
     policy = check_policy(policy)
-    if noise is None and policy == "expert" and expert_takes_noise(env):
-        noise = COLLECT_NOISE
+    noise = recording_noise(policy, env, noise)
     name = name or default_dataset_name(env, policy)
     require(bool(name.strip()) and "/" not in name and "\\" not in name, f"swm collect requires a plain dataset name (no path), got {name!r}")
     path = resolve_dataset_path(name)
@@ -66,7 +65,7 @@ def collect(
             out.print(f"Dataset [bold]{name}[/] exists: appending {episodes} episodes (--overwrite replaces it).", soft_wrap=True)
     with make_world(env, num_envs=num_envs, image_size=image_size, max_steps=max_steps, seed=seed) as world:
         options = reset_options(check_factors(world, variation or []))
-        world.set_policy(make_policy(policy, env, seed=seed, noise=noise or None))
+        world.set_policy(make_policy(policy, env, seed=seed, noise=noise))
         path = world.record_dataset(name, episodes=episodes, seed=seed, options=options)
     display_dataset_info(dataset_info(name))
     how = f" (action noise {noise:g})" if noise else ""

@@ -64,6 +64,14 @@ def expert_takes_noise(env_id: str) -> bool:
     return expert is not None and "noise" in inspect.signature(load_object(expert)).parameters
 
 
+def recording_noise(policy: str, env_id: str, noise: float | None) -> float | None:
+    """The expert action noise of a recording: ``noise`` when given, else :data:`COLLECT_NOISE`
+    for an expert that takes noise; ``None`` (no noise) otherwise or when ``noise`` is 0."""
+    if noise is None and policy == "expert" and expert_takes_noise(env_id):
+        noise = COLLECT_NOISE
+    return noise or None
+
+
 def make_policy(
     name: str, env_id: str, seed: int | None = None, plan: Any = None, device: str = "auto", noise: float | None = None
 ) -> Any:

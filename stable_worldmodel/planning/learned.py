@@ -16,15 +16,13 @@ from typing import Any
 
 from .. import keys
 from ..errors import ConfigError
+from ..wm.config import GOAL_COSTS
 
 logger = logging.getLogger(__name__)
 
 __all__ = ["PlanSettings", "world_model_policy"]
 
 SOLVERS = ("cem", "icem", "mppi", "gd", "random")
-#: goal costs of the models (``stable_worldmodel.wm.jepa.GOAL_COSTS``): the last prediction's
-#: distance to the goal (upstream's), or the closest prediction's (reaching the goal at any step)
-COSTS = ("final", "min")
 
 
 @dataclass(frozen=True)
@@ -50,10 +48,10 @@ class PlanSettings:
             from ..errors import unknown_name
 
             raise unknown_name("planning solver", self.solver, SOLVERS)
-        if self.cost not in COSTS:
+        if self.cost not in GOAL_COSTS:
             from ..errors import unknown_name
 
-            raise unknown_name("goal cost", self.cost, COSTS)
+            raise unknown_name("goal cost", self.cost, GOAL_COSTS)
         for name in ("horizon", "samples", "iterations"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:

@@ -11,10 +11,14 @@ from typing import Any, ClassVar
 
 from ..errors import ConfigError, did_you_mean
 
-__all__ = ["JEPAConfig", "IMAGENET_MEAN", "IMAGENET_STD", "VIT_SIZES"]
+__all__ = ["JEPAConfig", "IMAGENET_MEAN", "IMAGENET_STD", "VIT_SIZES", "GOAL_COSTS"]
 
 IMAGENET_MEAN = (0.485, 0.456, 0.406)
 IMAGENET_STD = (0.229, 0.224, 0.225)
+
+#: how a model scores a rollout against the goal (``goal_cost``): ``final`` (upstream's: the last
+#: predicted embedding) or ``min`` (the closest predicted embedding: reaching the goal at any step)
+GOAL_COSTS = ("final", "min")
 
 _BATCHNORM = {"_target_": "torch.nn.BatchNorm1d", "_partial_": True}
 _P = "stable_worldmodel.wm"

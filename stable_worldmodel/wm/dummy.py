@@ -34,7 +34,7 @@ class DummyWorldModel(nn.Module):
         self.image_shape, self.action_dim = tuple(int(v) for v in image_shape), int(action_dim)
         self.encoder = nn.Linear(int(np.prod(self.image_shape)), 10)
         self.predictor = nn.Linear(10 + self.action_dim, 10)
-        self.goal_cost = "final"  # or "min" (see stable_worldmodel.wm.jepa.GOAL_COSTS); set by planning
+        self.goal_cost = "final"  # or "min" (see stable_worldmodel.wm.config.GOAL_COSTS); set by planning
 
     def _embed(self, pixels: Any) -> torch.Tensor:
         if isinstance(pixels, np.ndarray):

@@ -27,14 +27,11 @@ from torch import nn
 
 from .. import keys
 from ..errors import ConfigError, UnknownNameError
+from .config import GOAL_COSTS
 
 __all__ = ["JEPA", "EMB", "ACT_EMB", "GOAL_EMB", "PREDICTED_EMB"]
 
 EMB, ACT_EMB, GOAL_EMB, PREDICTED_EMB = "emb", "act_emb", "goal_emb", "predicted_emb"
-
-#: how :meth:`JEPA.criterion` scores a rollout against the goal: ``final`` (upstream's: the last
-#: predicted embedding) or ``min`` (the closest predicted embedding: reaching the goal at any step)
-GOAL_COSTS = ("final", "min")
 
 
 def _require(info: dict, key: str, who: str) -> Any:
