@@ -112,7 +112,7 @@ class Trainer:
         self.scaler = torch.amp.GradScaler(device.type, enabled=precision == "16")
         self.generator = torch.Generator().manual_seed(seed)
         self.step = 0
-        self.window: list[float] = []  # train losses since the last log (checkpointed, for exact resume)
+        self.window: list[Any] = []  # train losses (floats or 0-d tensors) since the last log (checkpointed, for exact resume)
         self._collapse_warned = False
 
     # -- state -------------------------------------------------------------------------------
@@ -131,7 +131,7 @@ class Trainer:
                 "batches": self.generator.get_state(),
             },
             "steps": self.steps,
-            "loss_window": list(self.window),
+            "loss_window": [float(v) for v in self.window],
         }
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
@@ -203,8 +203,6 @@ class Trainer:
                 with self._autocast():
                     out = self.model.loss(batch)
                 loss = out["loss"]
-                if not torch.isfinite(loss):
-                    raise FloatingPointError(f"Training diverged: loss is {float(loss)} at step {self.step}; lower --lr or use --precision 32")
                 self.optimizer.zero_grad(set_to_none=True)
                 self.scaler.scale(loss).backward()
                 if self.cfg.grad_clip:
@@ -214,11 +212,16 @@ class Trainer:
                 self.scaler.update()
                 self.scheduler.step()
                 self.step += 1
-                self.window.append(float(loss.detach()))
+                self.window.append(loss.detach())  # read back at the log: no host-device sync per step
                 bar.update(1)
                 if self.step % self.log_every == 0 or self.step == self.steps:
-                    last_loss = sum(self.window) / len(self.window)
+                    losses = [float(v) for v in self.window]
                     self.window.clear()
+                    if not all(math.isfinite(v) for v in losses):
+                        raise FloatingPointError(
+                            f"Training diverged: loss {losses} in the {len(losses)} steps up to step {self.step}; lower --lr or use --precision 32"
+                        )
+                    last_loss = sum(losses) / len(losses)
                     rate = (self.step - start_step) * bs / max(time.perf_counter() - start, 1e-9)
                     record = {"step": self.step, "train/loss": last_loss, "lr": self.scheduler.get_last_lr()[0], "samples_per_s": rate}
                     record.update({f"train/{k}": float(v.detach()) for k, v in out.items() if k != "loss" and torch.is_tensor(v) and v.ndim == 0})

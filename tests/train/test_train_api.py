@@ -332,3 +332,20 @@ def test_resume_needs_the_same_number_of_steps(fit):
     fit("dummy", "r", steps=4)
     with pytest.raises(ConfigError, match=r"same number of steps as the run \(4\), got 6"):
         fit("dummy", "r", steps=6, resume=True)
+
+
+def test_a_diverging_run_stops_at_its_next_log(fit, monkeypatch):
+    from stable_worldmodel.wm.dummy import DummyWorldModel
+
+    loss = DummyWorldModel.loss
+
+    def nan_after_three(self, batch, calls=[]):  # noqa: B006 (a call counter)
+        out = loss(self, batch)
+        calls.append(1)
+        if len(calls) > 3:
+            out["loss"] = out["loss"] * float("nan")
+        return out
+
+    monkeypatch.setattr(DummyWorldModel, "loss", nan_after_three)
+    with pytest.raises(FloatingPointError, match=r"Training diverged: loss \[.*nan.*\] in the 5 steps up to step 5; lower --lr"):
+        fit("dummy", "nan", steps=20, log_every=5)
