@@ -1,8 +1,12 @@
-"""Shared fixtures: every test gets its own empty cache directory."""
+"""Shared fixtures: every test gets its own empty cache directory; the ``swm`` command runner
+and its ``error_line`` check; one torch thread for tiny models."""
 
 from __future__ import annotations
 
 import pytest
+from typer.testing import CliRunner
+
+from stable_worldmodel.cli import app
 
 
 @pytest.fixture(autouse=True)
@@ -11,3 +15,44 @@ def _stablewm_home(tmp_path, monkeypatch):
     home = tmp_path / "stablewm_home"
     monkeypatch.setenv("STABLEWM_HOME", str(home))
     return home
+
+
+class Swm:
+    """``swm(*args, input=...)`` runs the command in-process and returns Typer's Result."""
+
+    def __init__(self) -> None:
+        self.runner = CliRunner()
+
+    def __call__(self, *args: str, input: str | None = None, **kwargs):
+        return self.runner.invoke(app, list(args), input=input, prog_name="swm", **kwargs)
+
+
+@pytest.fixture
+def swm() -> Swm:
+    return Swm()
+
+
+def _error_line(result) -> str:
+    lines = [line for line in result.stderr.splitlines() if line.strip()]
+    assert len(lines) == 1, f"expected one error line, got {lines!r}"
+    assert lines[0].startswith("Error: "), lines[0]
+    assert "Traceback" not in result.output
+    assert result.exception is None or isinstance(result.exception, SystemExit), result.exception
+    return lines[0]
+
+
+@pytest.fixture
+def error_line():
+    """``error_line(result)``: the single ``Error: ...`` line of a failed command (asserted to be one line)."""
+    return _error_line
+
+
+@pytest.fixture
+def one_torch_thread():
+    """Width-8 models are fastest on one thread; several threads on a busy CPU are 50x slower."""
+    import torch
+
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(threads)

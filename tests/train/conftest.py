@@ -1,5 +1,5 @@
 """Fixtures of the trainer tests: one toy dataset recorded once per session and copied into each
-test's cache, synthetic datasets with chosen columns, tiny model sizes, and the ``swm`` runner."""
+test's cache, synthetic datasets with chosen columns, tiny model sizes (the ``swm`` runner is in ../conftest.py)."""
 
 from __future__ import annotations
 
@@ -7,8 +7,6 @@ import shutil
 
 import numpy as np
 import pytest
-import torch
-from typer.testing import CliRunner
 
 TOY = "swm/Toy-v0"
 #: name of the recorded dataset in every test's cache
@@ -29,12 +27,8 @@ TINY = {
 
 
 @pytest.fixture(autouse=True)
-def _one_thread():
-    """Width-8 models are fastest on one thread (and the CPU may be shared)."""
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(threads)
+def _one_thread(one_torch_thread):
+    """Every trainer test runs torch on one thread (see ../conftest.py)."""
 
 
 @pytest.fixture(scope="session")
@@ -95,28 +89,6 @@ def fit(toy):
     return run
 
 
-@pytest.fixture
-def swm():
-    """``swm(*args)`` runs the command in-process and returns Typer's Result."""
-    from stable_worldmodel.cli import app
-
-    runner = CliRunner()
-    return lambda *args: runner.invoke(app, list(args), prog_name="swm")
-
-
-@pytest.fixture
-def error_line():
-    """``error_line(result)``: the single ``Error: ...`` line of a failed command (asserted to be one line)."""
-
-    def line(result) -> str:
-        lines = [text for text in result.stderr.splitlines() if text.strip()]
-        assert len(lines) == 1, f"expected one error line, got {lines!r}"
-        assert lines[0].startswith("Error: "), lines[0]
-        assert "Traceback" not in result.output
-        assert result.exception is None or isinstance(result.exception, SystemExit), result.exception
-        return lines[0]
-
-    return line
 
 
 @pytest.fixture

@@ -3,17 +3,12 @@
 from __future__ import annotations
 
 import pytest
-import torch
 from _tiny import make_tiny, moving_dot
 
 
 @pytest.fixture(autouse=True)
-def _one_thread():
-    """Width-8 models are fastest on one thread; several threads on a busy CPU are 50x slower."""
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    yield
-    torch.set_num_threads(threads)
+def _one_thread(one_torch_thread):
+    """Every wm test runs torch on one thread (see ../conftest.py)."""
 
 
 @pytest.fixture
