@@ -13,6 +13,7 @@ from torch import nn
 
 from .. import keys
 from ..errors import SpaceError, UnknownNameError
+from .jepa import goal_distance
 
 __all__ = ["DummyWorldModel"]
 
@@ -88,11 +89,9 @@ class DummyWorldModel(nn.Module):
             goal = goal[:, 0] if goal.ndim == len(self.image_shape) + 3 else goal
             info["goal_emb"] = self._embed(goal)[:, -1]
         self.rollout(info, candidates)
-        pred = info["predicted_emb"]  # (B, S, H + 1, 10) or (B, H + 1, 10)
+        pred = info["predicted_emb"]  # (B, S, H + 1, 10) or (B, H + 1, 10): one context embedding
         goal = info["goal_emb"] if pred.ndim == 3 else info["goal_emb"].unsqueeze(1)
-        if self.goal_cost == "final":
-            return (pred[..., -1, :] - goal).square().sum(-1)
-        return (pred[..., 1:, :] - goal.unsqueeze(-2)).square().sum(-1).amin(-1)  # "min": the closest step
+        return goal_distance(pred, goal, self.goal_cost, context=1)
 
     def loss(self, batch: dict) -> dict:
         emb = self._embed(batch[keys.PIXELS])  # (B, T, 10)

@@ -29,9 +29,22 @@ from .. import keys
 from ..errors import ConfigError, UnknownNameError
 from .config import GOAL_COSTS
 
-__all__ = ["JEPA", "EMB", "ACT_EMB", "GOAL_EMB", "PREDICTED_EMB"]
+__all__ = ["JEPA", "EMB", "ACT_EMB", "GOAL_EMB", "PREDICTED_EMB", "goal_distance"]
 
 EMB, ACT_EMB, GOAL_EMB, PREDICTED_EMB = "emb", "act_emb", "goal_emb", "predicted_emb"
+
+
+def goal_distance(pred: torch.Tensor, goal: torch.Tensor, goal_cost: str, context: int) -> torch.Tensor:
+    """Squared distance to ``goal (..., D)`` of a rollout ``pred (..., T + H, D)`` whose first
+    ``context`` embeddings are the context: of its last embedding (``goal_cost="final"``,
+    upstream's) or of its closest prediction (``"min"``). Returns ``(...)``."""
+    if goal_cost == "final":
+        return (pred[..., -1, :] - goal).square().sum(-1)
+    if goal_cost != "min":
+        from ..errors import unknown_name
+
+        raise unknown_name("goal cost", goal_cost, GOAL_COSTS)
+    return (pred[..., context:, :] - goal.unsqueeze(-2)).square().sum(-1).amin(-1)
 
 
 def _require(info: dict, key: str, who: str) -> Any:
@@ -154,15 +167,7 @@ class JEPA(nn.Module):
         (``goal_cost == "final"``, upstream's) or of the closest predicted one (``"min"``): ``(B, S)``."""
         goal = info[GOAL_EMB]
         goal = goal[:, :, -1] if goal.ndim == 4 else goal[:, -1].unsqueeze(1)  # (B, S or 1, D)
-        pred = info[PREDICTED_EMB]
-        if self.goal_cost == "final":
-            return (pred[..., -1, :] - goal).square().sum(-1)
-        if self.goal_cost != "min":
-            from ..errors import unknown_name
-
-            raise unknown_name("goal cost", self.goal_cost, GOAL_COSTS)
-        t = info[EMB].shape[-2]  # the context frames are not predictions
-        return (pred[..., t:, :] - goal.unsqueeze(-2)).square().sum(-1).amin(-1)
+        return goal_distance(info[PREDICTED_EMB], goal, self.goal_cost, context=info[EMB].shape[-2])
 
     def get_cost(self, info: dict, action_candidates: torch.Tensor) -> torch.Tensor:
         """Cost of ``action_candidates: (B, S, H, A)`` (normalized action blocks) to reach ``info["goal"]``: ``(B, S)``."""

@@ -304,3 +304,9 @@ def test_single_token_attention_shortcut_equals_full_attention():
     expected = attn.to_out(full.transpose(1, 2).reshape(5, 1, 8))
     assert_close(attn(x), expected)
     assert attn(torch.randn(5, 3, 8)).shape == (5, 3, 8)  # longer sequences take the full path
+
+
+def test_dummy_unknown_goal_cost_is_named(dummy):
+    dummy.goal_cost = "mean"
+    with pytest.raises(KeyError, match="Unknown goal cost 'mean'.*final, min"):
+        dummy.get_cost({keys.PIXELS: images(2, 1), keys.GOAL: images(2, 1)}, randn(2, 3, 4, A))
