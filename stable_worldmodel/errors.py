@@ -47,6 +47,10 @@ class DatasetFormatError(SWMError, ValueError):
     """A dataset file that does not have the expected layout."""
 
 
+class DatasetBusyError(SWMError, BlockingIOError):
+    """A dataset that another writer (named in the message) is writing."""
+
+
 def did_you_mean(name: str, candidates: Iterable[str], n: int = 3) -> str:
     """Return a ``" Did you mean 'x'?"`` suffix, or ``""`` when nothing is close."""
     candidates = [str(c) for c in candidates]

@@ -97,6 +97,18 @@ class BasePolicy:
         """Attach the (vectorized) env whose batched action space the policy must fill."""
         self.env = env
 
+    def set_seed(self, seed: int | None) -> None:
+        """Restart the policy's random stream from ``seed`` (its ``rng``, if it has one); None keeps it.
+
+        ``World.evaluate(seed=s)`` and ``World.record_dataset(seed=s)`` call it, so that the same
+        seed gives the same episodes however often the policy was used before.
+        """
+        if seed is None:
+            return
+        self.seed = seed
+        if isinstance(getattr(self, "rng", None), np.random.Generator):
+            self.rng = np.random.default_rng(seed)
+
     def get_action(self, obs: Any, **kwargs: Any) -> Any:
         raise NotImplementedError("get_action(info_dict) -> actions shaped like env.action_space")
 

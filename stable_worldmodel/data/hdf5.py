@@ -10,8 +10,12 @@ are visible.
 
 from __future__ import annotations
 
+import contextlib
+import functools
 import logging
 import os
+import re
+import sys
 from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -24,6 +28,7 @@ from ..errors import DatasetFormatError
 from . import _superblock
 from .dataset import Dataset
 from .utils import resolve_dataset_path
+from ._index import check_file, read_index
 from .writer import is_image_column
 
 logger = logging.getLogger(__name__)
@@ -33,13 +38,62 @@ CACHE_BYTES = 64 << 20  # decoded bytes kept per column and process
 PRELOAD_BYTES = 256 << 20  # datasets whose loaded columns decode to at most this are read at construction
 
 
+SWMR_READ_ATTEMPTS = 28  # HDF5 re-reads a metadata block whose checksum fails this often (~0.3 s of back-off)
+
+
+@functools.cache
+def _set_read_attempts():
+    """``H5Pset_metadata_read_attempts`` of the HDF5 library h5py runs on, or None where it cannot be found.
+
+    A SWMR reader re-reads metadata whose checksum fails, in case a writer was half-way through
+    it; HDF5's default (100 attempts with a doubling back-off) turns a damaged file into a
+    hang of hours. h5py does not wrap the setting, so it is called through ctypes.
+    """
+    import ctypes
+    import ctypes.util
+    import glob
+
+    import h5py
+
+    candidates = []
+    if sys.platform.startswith("linux"):  # the library this process loaded for h5py
+        with contextlib.suppress(OSError), open("/proc/self/maps") as fh:
+            candidates += sorted({line.split()[-1] for line in fh if re.search(r"/libhdf5[-.][^/]*$", line.strip())})
+    package = Path(h5py.__file__).parent
+    candidates += glob.glob(str(package.parent / "h5py.libs" / "libhdf5-*")) + glob.glob(str(package / ".dylibs" / "libhdf5*"))
+    candidates += [ctypes.util.find_library("hdf5")]
+    for candidate in filter(None, candidates):
+        try:
+            fn = ctypes.CDLL(candidate).H5Pset_metadata_read_attempts
+        except (OSError, AttributeError):
+            continue
+        fn.argtypes, fn.restype = [ctypes.c_int64, ctypes.c_uint], ctypes.c_int
+        return fn
+    logger.debug("H5Pset_metadata_read_attempts not found: damaged files may take long to be reported")
+    return None
+
+
+def _open_swmr(path: str | os.PathLike, locking: bool | None):
+    """``h5py.File(path, 'r', libver='latest', swmr=True)`` that gives up on a bad checksum within a second."""
+    import h5py
+    from h5py._hl.files import make_fapl
+
+    fapl = make_fapl(None, libver="latest", locking=locking)
+    setter = _set_read_attempts()
+    if setter is not None and setter(fapl.id, SWMR_READ_ATTEMPTS) < 0:  # pragma: no cover - another HDF5 build
+        logger.debug("H5Pset_metadata_read_attempts refused h5py's property list")
+    fid = h5py.h5f.open(os.fsencode(path), h5py.h5f.ACC_RDONLY | h5py.h5f.ACC_SWMR_READ, fapl=fapl)
+    return h5py.File(fid)
+
+
 def open_h5(path: str | os.PathLike):
     """Open ``path`` read-only: as a SWMR reader first, plainly as a fallback.
 
     A SWMR reader can keep reading a file that a writer is still appending to (a plain reader
     of a live file may fail once the writer has grown it past its slack, see :mod:`.writer`);
     files in older layouts, or already open plainly in this process, fall back to plain opens;
-    file systems without locks to opens without locking.
+    file systems without locks to opens without locking. A damaged file fails within a second
+    or two (:data:`SWMR_READ_ATTEMPTS`) with :class:`DatasetFormatError`.
     A file left flagged by a killed writer of an older version is repaired first.
     """
     import h5py
@@ -52,14 +106,14 @@ def open_h5(path: str | os.PathLike):
     # HDF5 shares a file opened twice in one process only with compatible flags: a later plain
     # h5py.File(path) joins a SWMR reader opened with default locking, not the other way round
     attempts = (
-        dict(libver="latest", swmr=True),
-        dict(),
-        dict(libver="latest", swmr=True, locking=False),  # file systems without locks, or a locking writer
-        dict(locking=False),
+        lambda: _open_swmr(path, None),
+        lambda: h5py.File(path, "r"),
+        lambda: _open_swmr(path, False),  # file systems without locks, or a locking writer
+        lambda: h5py.File(path, "r", locking=False),
     )
-    for i, kwargs in enumerate(attempts):
+    for i, attempt in enumerate(attempts):
         try:
-            return h5py.File(path, "r", **kwargs)
+            return attempt()
         except OSError as exc:
             if i == len(attempts) - 1:
                 raise DatasetFormatError(f"HDF5Dataset requires a readable HDF5 file, got {str(path)!r}: {exc}") from exc
@@ -100,34 +154,25 @@ class HDF5Dataset(Dataset):
     ):
         super().__init__(frameskip=frameskip, num_steps=num_steps, transform=transform, keys_to_load=keys_to_load)
         self.path = resolve_dataset_path(name, cache_dir)
-        if not self.path.is_file():
-            raise FileNotFoundError(f"HDF5Dataset requires an existing .h5 file, got {str(self.path)!r} (not found)")
+        check_file(self.path, "HDF5Dataset")
         self.name = self.path.stem
         self._file = None
         self._pid = None
         self._blocks: dict[str, OrderedDict] = {}
         f = self._handle()
-        missing = [k for k in (keys.EP_LEN, keys.EP_OFFSET) if k not in f]
-        if missing:
-            raise DatasetFormatError(f"HDF5Dataset requires columns {missing} in {self.path}, got {sorted(f)}")
-        self._lengths = f[keys.EP_LEN][:].astype(np.int64)
-        self._offsets = f[keys.EP_OFFSET][: len(self._lengths)].astype(np.int64)
-        if len(self._offsets) != len(self._lengths):
-            raise DatasetFormatError(
-                f"HDF5Dataset requires one ep_offset per ep_len in {self.path}, "
-                f"got {len(self._offsets)} offsets for {len(self._lengths)} episodes"
-            )
-        import h5py
-
-        self._columns = [k for k, v in f.items() if isinstance(v, h5py.Dataset) and k not in (keys.EP_LEN, keys.EP_OFFSET)]
-        self._shapes = {k: (tuple(f[k].shape[1:]), f[k].dtype) for k in self._columns}
-        self._images = {k for k, (shape, dtype) in self._shapes.items() if is_image_column(shape, dtype)}
-        self._block_rows = {k: self._choose_block(f[k]) for k in self._columns}
-        self._max_blocks = {k: max(8, CACHE_BYTES // max(self._block_rows[k] * self._row_bytes(k), 1)) for k in self._columns}
+        try:
+            self._lengths, self._offsets, self._columns = read_index(f, self.path)
+            self._describe_columns(f)
+        except (OSError, KeyError) as exc:  # h5py: damaged metadata (KeyError when an object cannot be opened)
+            self.close()
+            raise DatasetFormatError(f"HDF5Dataset could not read the episode index of {self.path} (damaged?): {exc}") from exc
+        except DatasetFormatError:
+            self.close()
+            raise
         if keys_to_load is not None:
             self.check_keys(keys_to_load)
         self._cache: dict[str, np.ndarray] = {}
-        end = self.num_rows
+        end = self._end
         to_cache = self.check_keys(list(keys_to_cache or []))
         if preload is None:
             decoded = sum(end * self._row_bytes(c) for c in self.keys_to_load)
@@ -135,10 +180,16 @@ class HDF5Dataset(Dataset):
         if preload:
             to_cache += [c for c in self.keys_to_load if c not in to_cache]
         for col in to_cache:
-            rows = f[col][:end]
+            rows = self._rows(col, 0, end)
             # images are kept (N, C, H, W) so that items need no transposing copy; _read
             # hands out (N, H, W, C) views of them like every other reader
             self._cache[col] = np.ascontiguousarray(np.moveaxis(rows, -1, -3)) if col in self._images else rows
+
+    def _describe_columns(self, f) -> None:
+        self._shapes = {k: (tuple(f[k].shape[1:]), f[k].dtype) for k in self._columns}
+        self._images = {k for k, (shape, dtype) in self._shapes.items() if is_image_column(shape, dtype)}
+        self._block_rows = {k: self._choose_block(f[k]) for k in self._columns}
+        self._max_blocks = {k: max(8, CACHE_BYTES // max(self._block_rows[k] * self._row_bytes(k), 1)) for k in self._columns}
 
     # -- file handle --------------------------------------------------------------------------
     def _handle(self):
@@ -195,20 +246,31 @@ class HDF5Dataset(Dataset):
             return cached[start:stop]
         size = self._block_rows[col]
         if stop <= start:
-            return self._handle()[col][start:stop]
+            return self._rows(col, start, stop)
         b0, b1 = start // size, (stop - 1) // size
         if b1 - b0 > 2:  # a long range: one direct read
-            return self._handle()[col][start:stop]
+            return self._rows(col, start, stop)
         parts = [self._block(col, b, size) for b in range(b0, b1 + 1)]
         rows = parts[0] if len(parts) == 1 else np.concatenate(parts)
         return rows[start - b0 * size : stop - b0 * size]
 
+    def _rows(self, col: str, start: int, stop: int) -> np.ndarray:
+        """Rows ``start:stop`` of ``col`` from the file; a damaged file raises :class:`DatasetFormatError`."""
+        try:
+            return self._handle()[col][start:stop]
+        except OSError as exc:
+            raise DatasetFormatError(f"HDF5Dataset could not read rows {start}:{stop} of column {col!r} of {self.path} (damaged?): {exc}") from exc
+
+    @property
+    def _end(self) -> int:
+        """One past the last row of the last episode."""
+        return int(self._offsets[-1] + self._lengths[-1]) if len(self._lengths) else 0
+
     def _block(self, col: str, b: int, size: int) -> np.ndarray:
-        f = self._handle()
         lru = self._blocks.setdefault(col, OrderedDict())
         block = lru.get(b)
         if block is None:
-            block = f[col][b * size : (b + 1) * size]
+            block = self._rows(col, b * size, (b + 1) * size)
             lru[b] = block
             if len(lru) > self._max_blocks[col]:
                 lru.popitem(last=False)
@@ -224,10 +286,9 @@ class HDF5Dataset(Dataset):
 
     def get_col_data(self, col: str) -> np.ndarray:
         self.check_keys([col])
-        end = self.num_rows and int(self._offsets[-1] + self._lengths[-1])
         if col in self._cache:
-            return self._cached(col)[:end]
-        return self._handle()[col][:end]
+            return self._cached(col)[: self._end]
+        return self._rows(col, 0, self._end)
 
     def __repr__(self) -> str:
         return f"HDF5Dataset({str(self.path)!r}, " + super().__repr__().split("(", 1)[1]

@@ -3,7 +3,7 @@
 Layout (N = total rows over all episodes, E = episodes)::
 
     <column>    (N, ...)        one flat dataset per info column, episodes concatenated
-    pixels      (N, H, W, 3)    uint8 images (gzip, chunked along rows)
+    pixels      (N, H, W, 3)    uint8 images (gzip, one row per chunk; see column_storage)
     action      (N, A)          row t holds the action taken at step t (NaN on an episode's last row)
     ep_len      (E,)  int32     rows of each episode
     ep_offset   (E,)  int64     first row of each episode
@@ -11,7 +11,12 @@ Layout (N = total rows over all episodes, E = episodes)::
 
 Commit record: rows are appended (resizable chunked datasets) and flushed *before*
 ``ep_len`` / ``ep_offset`` grow; readers trust only those two columns and ignore rows past
-the last committed episode (a resuming writer drops them).
+the last committed episode (a resuming writer writes over them). ``next_seed`` is stored
+before the ``ep_len`` entries it follows, so a kill between the two skips seeds but never
+makes a resumed recording repeat one.
+
+Committed rows are immutable: no later write touches their bytes (see :func:`column_storage`),
+so a kill can only lose the commit under way.
 
 Crash safety. A ``kill -9`` (or power-preserving crash of the process) at any moment leaves
 a file that plain ``h5py.File(path)`` opens, with default arguments and no repair step, and
@@ -32,10 +37,12 @@ the episodes of the call under way are committed entirely or not at all. How:
 Not covered: the operating system crashing or losing power (nothing is fsync'ed).
 
 Readers may open the file while it is written and see the episodes committed when they
-opened it. A plain reader assumes the file does not change under it: it works while the
-writer appends less than ``SLACK`` bytes during its reads (otherwise HDF5 reports ``addr
-overflow``; open it again). SWMR readers (``h5py.File(path, 'r', libver='latest',
-swmr=True)``) have no such limit.
+opened it: :class:`~.hdf5.HDF5Dataset` does, and so does h5py's SWMR reader
+(``h5py.File(path, 'r', libver='latest', swmr=True)``). A plain ``h5py.File(path)`` assumes
+the file does not change under it: opened in the middle of a commit it can read half-written
+metadata (``incorrect metadata checksum``; HDF5 retries those reads only in SWMR mode), and
+it fails with ``addr overflow`` once the writer has appended more than ``SLACK`` bytes since
+it opened. Open it again, or use one of the two readers above.
 
 Failures: an I/O error inside HDF5's writes (``ENOSPC``...) raises :class:`DatasetFormatError`
 and a ``KeyboardInterrupt`` raised there propagates; in both cases nothing more is written, the
@@ -56,12 +63,14 @@ import numpy as np
 from .. import keys
 from ..errors import DatasetFormatError
 from . import _superblock
+from ._index import not_a_file, read_index
+from ._lock import WriterLock
 
 logger = logging.getLogger(__name__)
 
 NEXT_SEED_ATTR = "next_seed"
-IMAGE_CHUNK_BYTES = 256 * 1024
-NUMERIC_CHUNK_BYTES = 64 * 1024
+COMPRESS_ROW_BYTES = 1024  # rows this big are compressed (one per chunk); smaller ones are stored raw
+NUMERIC_CHUNK_BYTES = 16 * 1024
 GZIP_LEVEL = 4
 INDEX_COLUMNS = (keys.EP_LEN, keys.EP_OFFSET)
 
@@ -77,12 +86,44 @@ def is_recordable(value: Any) -> bool:
     return dtype == np.bool_ or np.issubdtype(dtype, np.number)
 
 
-def _chunk_rows(row_shape: tuple[int, ...], dtype: np.dtype, image: bool) -> int:
-    row_bytes = max(int(np.prod(row_shape, dtype=np.int64)) * np.dtype(dtype).itemsize, 1)
-    target = IMAGE_CHUNK_BYTES if image else NUMERIC_CHUNK_BYTES
-    rows = max(1, target // row_bytes)
-    rows = 1 << (rows.bit_length() - 1)  # power of two
-    return min(rows, 64) if image else min(max(rows, 256), 65536)
+def column_storage(row_shape: tuple[int, ...], dtype: np.dtype) -> dict[str, Any]:
+    """``create_dataset`` arguments of a column: no HDF5 chunk ever holds rows of two commits' making.
+
+    An HDF5 chunk that is written twice is rewritten whole (a compressed one moves, and its old
+    space can be handed to the next allocation before the index that points at it is on disk),
+    so a kill at the wrong moment could damage rows committed long before. Hence:
+
+    * rows of at least :data:`COMPRESS_ROW_BYTES` (images...) are compressed, one row per chunk:
+      each chunk is written once, when its row is appended. The price is compression across
+      frames: a 64x64 PushT recording takes about 2.3x the bytes of 16-row chunks (bench_data);
+    * smaller rows are stored uncompressed in chunks of about :data:`NUMERIC_CHUNK_BYTES`, with
+      no fill value and no chunk cache (see :meth:`HDF5Writer._open`), so HDF5 writes exactly
+      the bytes of the appended rows into the chunk and never touches the rows before them.
+    """
+    dtype = np.dtype(dtype)
+    row_bytes = max(int(np.prod(row_shape, dtype=np.int64)) * dtype.itemsize, 1)
+    if row_bytes >= COMPRESS_ROW_BYTES:
+        return dict(
+            chunks=(1, *row_shape),
+            compression="gzip",
+            compression_opts=GZIP_LEVEL,
+            shuffle=not is_image_column(row_shape, dtype) and dtype.itemsize > 1,
+        )
+    rows = 1 << ((NUMERIC_CHUNK_BYTES // row_bytes).bit_length() - 1)  # a power of two
+    return dict(chunks=(max(rows, 1), *row_shape), fillvalue=None, fill_time="never")
+
+
+def _write_rows(dset, start: int, rows: np.ndarray) -> None:
+    """Write ``rows`` at ``start`` (growing ``dset`` if needed) and flush them.
+
+    A dataset is never shrunk: HDF5 would rewrite the chunk that holds its last committed rows.
+    Rows past ``start`` left by a killed commit are written over instead (readers ignore them).
+    """
+    end = start + len(rows)
+    if dset.shape[0] < end:
+        dset.resize(end, axis=0)
+    dset[start:end] = rows
+    dset.flush()
 
 
 def _close(f, fileobj: _superblock.SealedFile) -> None:
@@ -98,12 +139,14 @@ def _close(f, fileobj: _superblock.SealedFile) -> None:
 class HDF5Writer:
     """Append whole episodes to ``path`` (created on the first episode, resumed if it exists).
 
-    Use as a context manager or call :meth:`close`. ``write_episodes`` takes a list of
+    One writer per dataset: another writer of ``path`` (in any process) makes this one raise
+    :class:`~stable_worldmodel.errors.DatasetBusyError` naming it, or wait for it with
+    ``wait=True`` (or ``wait=seconds``). Use as a context manager or call :meth:`close`. ``write_episodes`` takes a list of
     episodes, each a mapping column -> array ``(L, ...)`` with the same columns, per-row
     shapes and dtypes as the episodes already in the file.
     """
 
-    def __init__(self, path: str | os.PathLike):
+    def __init__(self, path: str | os.PathLike, wait: bool | float = False):
         import h5py
 
         self.path = Path(path)
@@ -116,8 +159,18 @@ class HDF5Writer:
         self.num_rows = 0
         self.num_episodes = 0
         self.next_seed: int | None = None
-        if self.path.exists():
-            self._resume()
+        what = not_a_file(self.path)
+        if what is not None:
+            raise DatasetFormatError(f"HDF5Writer requires an .h5 file path, got {str(self.path)!r}, which is {what}")
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._lock = WriterLock(self.path, wait).acquire()
+        self._unlock = weakref.finalize(self, self._lock.release)
+        try:
+            if self.path.exists():
+                self._resume()
+        except BaseException:
+            self.close()
+            raise
 
     # -- opening ------------------------------------------------------------------------------
     def _resume(self) -> None:
@@ -127,21 +180,16 @@ class HDF5Writer:
             f = self._open(_superblock.SealedFile(self.path), "r+")
         except OSError as exc:
             raise DatasetFormatError(f"HDF5Writer requires a readable HDF5 file, got {self.path}: {exc}") from exc
-        missing = [k for k in INDEX_COLUMNS if k not in f]
-        if missing:
+        try:
+            lengths, offsets, columns = read_index(f, self.path, "HDF5Writer")
+            self._schema = {name: (tuple(f[name].shape[1:]), f[name].dtype) for name in columns}
+        except (OSError, KeyError, DatasetFormatError) as exc:
             self.close()
-            raise DatasetFormatError(f"HDF5Writer requires columns {missing} to append to {self.path}, got {sorted(f)}")
-        lengths = f[keys.EP_LEN][:].astype(np.int64)
+            if isinstance(exc, DatasetFormatError):
+                raise
+            raise DatasetFormatError(f"HDF5Writer could not read the episode index of {self.path} (damaged?): {exc}") from exc
         self.num_episodes = len(lengths)
-        self.num_rows = int(lengths.sum())
-        for name, dset in f.items():
-            if name in INDEX_COLUMNS or not isinstance(dset, self._h5py.Dataset):
-                continue
-            self._schema[name] = (tuple(dset.shape[1:]), dset.dtype)
-            if dset.shape[0] != self.num_rows:  # rows of an uncommitted episode: drop them
-                dset.resize(self.num_rows, axis=0)
-        if len(f[keys.EP_OFFSET]) != self.num_episodes:
-            f[keys.EP_OFFSET].resize(self.num_episodes, axis=0)
+        self.num_rows = int(offsets[-1] + lengths[-1]) if len(lengths) else 0  # later rows (a killed commit): written over
         seed = f.attrs.get(NEXT_SEED_ATTR)
         self.next_seed = None if seed is None or int(seed) < 0 else int(seed)
         if NEXT_SEED_ATTR not in f.attrs:
@@ -150,27 +198,17 @@ class HDF5Writer:
         self._raise_io_error("resume")
 
     def _create(self, episode: Mapping[str, np.ndarray]) -> None:
-        self.path.parent.mkdir(parents=True, exist_ok=True)
         partial = self.path.with_name(f".{self.path.name}.partial")  # renamed once it is a valid file
         f = self._open(_superblock.SealedFile(partial, create=True, name=self.path), "w")
         try:
             for name, value in episode.items():
                 arr = np.asarray(value)
                 row_shape, dtype = tuple(arr.shape[1:]), arr.dtype
-                image = is_image_column(row_shape, dtype)
-                f.create_dataset(
-                    name,
-                    shape=(0, *row_shape),
-                    maxshape=(None, *row_shape),
-                    dtype=dtype,
-                    chunks=(_chunk_rows(row_shape, dtype, image), *row_shape),
-                    compression="gzip",
-                    compression_opts=GZIP_LEVEL,
-                    shuffle=not image and dtype.itemsize > 1,
-                )
+                storage = column_storage(row_shape, dtype)
+                f.create_dataset(name, shape=(0, *row_shape), maxshape=(None, *row_shape), dtype=dtype, **storage)
                 self._schema[name] = (row_shape, dtype)
-            f.create_dataset(keys.EP_LEN, shape=(0,), maxshape=(None,), dtype=np.int32, chunks=(4096,))
-            f.create_dataset(keys.EP_OFFSET, shape=(0,), maxshape=(None,), dtype=np.int64, chunks=(4096,))
+            for name, dtype in ((keys.EP_LEN, np.int32), (keys.EP_OFFSET, np.int64)):
+                f.create_dataset(name, shape=(0,), maxshape=(None,), dtype=dtype, **column_storage((), dtype))
             f.attrs[NEXT_SEED_ATTR] = np.int64(-1)
             self._start_swmr()
             self._raise_io_error("create")
@@ -184,7 +222,8 @@ class HDF5Writer:
     def _open(self, fileobj: _superblock.SealedFile, mode: str):
         """Open HDF5 on ``fileobj``; closed (HDF5 first, then the descriptor) by :meth:`close` or at exit."""
         try:
-            f = self._h5py.File(fileobj, mode, libver="latest")
+            # no chunk cache: a partly filled raw chunk gets only the appended rows' bytes written
+            f = self._h5py.File(fileobj, mode, libver="latest", rdcc_nbytes=0)
         except BaseException:
             fileobj.close()
             raise
@@ -261,10 +300,7 @@ class HDF5Writer:
         for name in self._schema:
             try:
                 data = np.concatenate([np.asarray(ep[name]) for ep in episodes])
-                dset = f[name]
-                dset.resize(start + total, axis=0)
-                dset[start:] = data
-                dset.flush()
+                _write_rows(f[name], start, data)
             except (OSError, TypeError, ValueError) as exc:
                 self._raise_io_error(f"write column {name!r} to")
                 raise DatasetFormatError(
@@ -274,14 +310,12 @@ class HDF5Writer:
             self._raise_io_error(f"write column {name!r} to")
         offsets = start + np.concatenate([[0], np.cumsum(lengths)[:-1]])
         try:
-            for name, values in ((keys.EP_OFFSET, offsets), (keys.EP_LEN, lengths)):  # ep_len last: the commit
-                dset = f[name]
-                dset.resize(self.num_episodes + len(lengths), axis=0)
-                dset[self.num_episodes :] = values
-                dset.flush()
-            if next_seed is not None:
+            if next_seed is not None:  # on disk before the commit: a kill after it skips seeds, never repeats
                 f.attrs.modify(NEXT_SEED_ATTR, np.int64(next_seed))
+                f.flush()
                 self.next_seed = int(next_seed)
+            for name, values in ((keys.EP_OFFSET, offsets), (keys.EP_LEN, lengths)):  # ep_len last: the commit
+                _write_rows(f[name], self.num_episodes, np.asarray(values))
             f.flush()
         except OSError as exc:
             self._raise_io_error("commit episodes to")
@@ -291,9 +325,12 @@ class HDF5Writer:
         self.num_episodes += len(lengths)
 
     def close(self) -> None:
-        """Close the file (every committed episode was already flushed); idempotent."""
+        """Close the file (every committed episode was already flushed) and let other writers in; idempotent."""
         self._closed = True
-        self._release()
+        try:
+            self._release()
+        finally:
+            self._unlock()
 
     def _release(self) -> None:
         io, closer = self._io, self._closer

@@ -93,6 +93,15 @@ class WorldModelPolicy(BasePolicy):
         self.solver.configure(action_space=space, n_envs=int(env.num_envs), config=self.cfg)
         self.reset_plan()
 
+    def set_seed(self, seed: int | None) -> None:
+        """Restart the solver's random stream and drop the current plan."""
+        if seed is None:
+            return
+        super().set_seed(seed)
+        if callable(getattr(self.solver, "set_seed", None)):  # a user Solver may not have it
+            self.solver.set_seed(seed)
+        self.reset_plan()
+
     def _planning_space(self, space: gym.Space) -> gym.Space:
         proc = self.process.get(keys.ACTION)
         if proc is None or not isinstance(space, gym.spaces.Box) or not space.is_bounded("both"):

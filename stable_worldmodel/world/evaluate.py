@@ -23,6 +23,12 @@ def _progress(world: World, total: int, desc: str):
     return tqdm(total=total, desc=desc, unit="ep", disable=not world.verbose, leave=False)
 
 
+def reseed_policy(policy: Any, seed: int | None) -> None:
+    """``policy.set_seed(seed)`` when a seed is given and the policy has the method (user policies may not)."""
+    if seed is not None and callable(getattr(policy, "set_seed", None)):
+        policy.set_seed(int(seed))
+
+
 def episode_seeds(world: World, episodes: int, seed: int | None) -> list[int]:
     """One distinct seed per episode: ``seed + k``, or fresh draws from the world's generator."""
     if seed is not None:
@@ -44,6 +50,7 @@ def evaluate(world: World, episodes: int = 10, eval_keys=None, seed: int | None 
         raise RuntimeError("World.evaluate requires a policy: call world.set_policy(policy) first")
     eval_keys = list(eval_keys or [])
     seeds = episode_seeds(world, episodes, seed)
+    reseed_policy(world.policy, seed)
     n = world.num_envs
     first = min(n, episodes)
     # envs beyond the episode count run their own throw-away episodes and are never counted

@@ -30,13 +30,19 @@ def _progress(world: Any, total: int, desc: str):
     return tqdm(total=total, desc=desc, unit="ep", disable=int(getattr(world, "verbose", 1)) <= 0)
 
 
+NOT_RECORDED = frozenset({keys.RENDER_TIME})  # wall-clock timings: the same seed must give the same bytes
+
+
 def _last_frames(infos: Mapping[str, Any]) -> dict[str, np.ndarray]:
-    """Recordable info columns at the last history frame: ``{key: (B, ...)}`` (copies)."""
+    """Recordable info columns at the last history frame: ``{key: (B, ...)}`` (copies).
+
+    Private keys (``_...``) and timings (:data:`NOT_RECORDED`) are left out.
+    """
     from ..data.writer import is_recordable
 
     out = {}
     for key, value in infos.items():
-        if key.startswith("_"):
+        if key.startswith("_") or key in NOT_RECORDED:
             continue
         arr = np.asarray(value)
         if arr.ndim < 2 or not is_recordable(arr):
@@ -78,6 +84,7 @@ def record_dataset(
     """
     from ..data.utils import resolve_dataset_path
     from ..data.writer import HDF5Writer
+    from .evaluate import reseed_policy
 
     if isinstance(episodes, bool) or not isinstance(episodes, (int, np.integer)) or episodes < 1:
         raise ConfigError(f"record_dataset requires episodes to be a positive int, got {episodes!r}")
@@ -97,6 +104,7 @@ def record_dataset(
             next_seed = (next_seed + k) % SEED_LIMIT
             return seeds
 
+        reseed_policy(world.policy, next_seed)
         world.reset(seed=take(n), options=options)
         buffers: list[dict[str, list[np.ndarray]]] = [{} for _ in range(n)]
 

@@ -169,3 +169,23 @@ def test_plain_h5py_opens_the_file_next_to_a_dataset(make_h5):
         assert f[keys.EP_LEN][:].tolist() == list(LENGTHS) == g[keys.EP_LEN][:].tolist()
     with h5py.File(path, "r") as f:  # and the other way round
         assert HDF5Dataset(path, preload=False)[0][keys.STATE].shape == (1, 2)
+
+
+def test_a_new_reader_sees_episodes_committed_since_an_older_reader_opened(tmp_path, synth):
+    from stable_worldmodel.data.writer import HDF5Writer
+
+    path = tmp_path / "present.h5"
+    with HDF5Writer(path) as w:
+        w.write_episodes([synth(0, 3)])
+    old = HDF5Dataset(path, preload=False)  # keeps the file open in this process
+    assert old.num_episodes == 1 and old[0][keys.STATE].shape[0] == 1
+    with HDF5Writer(path) as w:
+        w.write_episodes([synth(1, 4), synth(2, 5)])
+    new = HDF5Dataset(path, preload=False)
+    assert new.lengths.tolist() == [3, 4, 5]
+    assert new.get_col_data(keys.STATE)[:, 0].tolist() == [0] * 3 + [1] * 4 + [2] * 5
+    live = HDF5Writer(path)  # still open while the script reads
+    live.write_episodes([synth(3, 2)])
+    assert HDF5Dataset(path).lengths.tolist() == [3, 4, 5, 2]
+    live.close()
+    assert old.num_episodes == 1  # a reader keeps the episodes it opened with

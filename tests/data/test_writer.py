@@ -21,8 +21,16 @@ from stable_worldmodel.data.writer import NEXT_SEED_ATTR, HDF5Writer
 from stable_worldmodel.errors import DatasetFormatError
 
 
+IMAGE = (24, 24)  # rows of 1.7 kB: compressed, one row per chunk (smaller rows are stored raw)
+
+
 def _length(ep: int) -> int:
     return 2 + ep % 5
+
+
+def _episode(synth, ep: int) -> dict[str, np.ndarray]:
+    """Episode ``ep`` as the recording children write it: a compressed image column and raw ones."""
+    return synth(ep, _length(ep), IMAGE)
 
 
 def _record_forever(path, synth, pause=0.0):  # pragma: no cover - runs in a forked child
@@ -31,7 +39,7 @@ def _record_forever(path, synth, pause=0.0):  # pragma: no cover - runs in a for
         writer = HDF5Writer(path)
         ep = writer.num_episodes
         while True:
-            writer.write_episodes([synth(ep, _length(ep))], next_seed=ep + 1)
+            writer.write_episodes([_episode(synth, ep)], next_seed=ep + 1)
             ep += 1
             time.sleep(pause)
     finally:
@@ -43,9 +51,9 @@ def _check_committed(f, synth) -> int:
     lengths, offsets = f[keys.EP_LEN][:], f[keys.EP_OFFSET][: len(f[keys.EP_LEN])]
     assert lengths.tolist() == [_length(e) for e in range(len(lengths))]
     end = int(offsets[-1] + lengths[-1]) if len(lengths) else 0
-    columns = {name: f[name][:end] for name in synth(0, 1)}
+    columns = {name: f[name][:end] for name in f if name not in (keys.EP_LEN, keys.EP_OFFSET)}
     for ep, (off, n) in enumerate(zip(offsets, lengths)):
-        for name, value in synth(ep, int(n)).items():
+        for name, value in synth(ep, int(n), columns[keys.PIXELS].shape[1:3]).items():
             np.testing.assert_array_equal(columns[name][off : off + n], value, err_msg=f"{name} of episode {ep}")
     return len(lengths)
 
@@ -66,7 +74,113 @@ def test_layout(make_h5):
         assert f[keys.PIXELS].shape == (16, 8, 8, 3) and f[keys.PIXELS].dtype == np.uint8
         assert f[keys.STATE][5:12, 0].tolist() == [1.0] * 7
         assert f.attrs[NEXT_SEED_ATTR] == 3
-        assert f[keys.PIXELS].compression == "gzip"
+        assert f[keys.PIXELS].compression is None  # 192-byte rows are stored raw
+        assert f[keys.STATE].chunks == (1024, 2)  # 16 KiB of raw rows
+
+
+def test_big_rows_are_compressed_one_row_per_chunk(make_h5):
+    path = make_h5((3, 2), image=IMAGE)
+    with h5py.File(path, "r") as f:
+        assert f[keys.PIXELS].compression == "gzip" and f[keys.PIXELS].chunks == (1, *IMAGE, 3)
+        assert f[keys.PIXELS].id.get_num_chunks() == 5
+        assert f[keys.STATE].compression is None
+
+
+def _committed_bytes(f) -> list[tuple[str, int, int]]:
+    """(column, start, end) file byte ranges that hold the rows of ``f``'s committed episodes."""
+    ranges = []
+    for name, dset in f.items():
+        rows = len(f[keys.EP_LEN]) if name in (keys.EP_LEN, keys.EP_OFFSET) else int(f[keys.EP_LEN][:].sum())
+        row_bytes = int(np.prod(dset.shape[1:], dtype=np.int64)) * dset.dtype.itemsize
+        for i in range(dset.id.get_num_chunks()):
+            chunk = dset.id.get_chunk_info(i)
+            first = chunk.chunk_offset[0]
+            if first >= rows:
+                continue
+            used = chunk.size if dset.compression else min(dset.chunks[0], rows - first) * row_bytes
+            ranges.append((name, chunk.byte_offset, chunk.byte_offset + used))
+    return ranges
+
+
+def test_appending_and_resuming_never_write_over_committed_rows(tmp_path, monkeypatch, synth):
+    """Committed rows are immutable: no write of a later commit (or of a resume) touches their bytes."""
+    path = tmp_path / "immutable.h5"
+    writes = []
+
+    class Logging(_superblock.SealedFile):
+        def _pwrite(self, view, pos):
+            writes.append((pos, pos + len(view)))
+            super()._pwrite(view, pos)
+
+    monkeypatch.setattr(_superblock, "SealedFile", Logging)
+    with HDF5Writer(path) as w:
+        for ep in range(4):
+            w.write_episodes([_episode(synth, ep)], next_seed=ep + 1)
+        committed = _committed_bytes(w._file)
+        writes.clear()
+        for ep in range(4, 12):
+            w.write_episodes([_episode(synth, ep)], next_seed=ep + 1)
+        for name in (keys.PIXELS, keys.STATE):  # rows a killed writer appended but never committed
+            w._file[name].resize(w.num_rows + 3, axis=0)
+            w._file[name][w.num_rows :] = w._file[name][:3]
+        w._file.flush()
+    assert writes and committed
+    with HDF5Writer(path) as w:  # the resume drops the uncommitted rows
+        assert w.num_episodes == 12
+        w.write_episodes([_episode(synth, 12)], next_seed=13)
+    clashes = [(c, w) for w in writes for c in committed if w[0] < c[2] and w[1] > c[1]]
+    assert not clashes, f"{len(clashes)} writes over committed rows, e.g. {clashes[:3]}"
+    with h5py.File(path) as f:
+        assert _check_committed(f, synth) == 13
+
+
+def _killed_at_write(path, synth, k):  # pragma: no cover - runs in a forked child
+    """Append episodes 3, 4, 5 (one commit each) and SIGKILL this process at HDF5's k-th write."""
+    calls = [0]
+    real = _superblock.SealedFile._pwrite
+
+    def counting(self, view, pos):
+        calls[0] += 1
+        if calls[0] == k:
+            os.kill(os.getpid(), signal.SIGKILL)
+        real(self, view, pos)
+
+    _superblock.SealedFile._pwrite = counting
+    try:
+        with HDF5Writer(path) as w:
+            for ep in range(3, 6):
+                w.write_episodes([_episode(synth, ep)], next_seed=ep + 1)
+    finally:
+        os._exit(0)
+
+
+def test_kill_at_every_write_keeps_committed_episodes_byte_identical(tmp_path, synth):
+    base = tmp_path / "base.h5"
+    with HDF5Writer(base) as w:
+        for ep in range(3):
+            w.write_episodes([_episode(synth, ep)], next_seed=ep + 1)
+    with h5py.File(base) as f:
+        before = {name: f[name][: int(f[keys.EP_LEN][:].sum())].tobytes() for name in f if f[name].ndim > 1}
+    path = tmp_path / "killed.h5"
+    outcomes = set()
+    for k in range(1, 200):
+        path.write_bytes(base.read_bytes())
+        proc = _fork(_killed_at_write, path, synth, k)
+        proc.join()
+        with h5py.File(path) as f:  # plain h5py, no repair
+            count = _check_committed(f, synth)
+            assert count >= 3, f"kill at write {k}"
+            for name, raw in before.items():
+                assert f[name][: len(raw) // f[name][0].nbytes].tobytes() == raw, f"{name} after a kill at write {k}"
+        with HDF5Writer(path) as w:  # resumes after the committed episodes: a seed may be skipped, none repeated
+            assert count <= w.next_seed <= count + 1, f"kill at write {k}"
+            w.write_episodes([_episode(synth, count)], next_seed=count + 1)
+        with h5py.File(path) as f:
+            assert _check_committed(f, synth) == count + 1
+        outcomes.add(count)
+        if proc.exitcode == 0:  # the child finished before its k-th write: every later k is the same
+            break
+    assert proc.exitcode == 0 and outcomes == {3, 4, 5, 6}, (k, outcomes)
 
 
 def test_append_resumes_and_keeps_next_seed(make_h5, synth):
@@ -81,7 +195,7 @@ def test_append_resumes_and_keeps_next_seed(make_h5, synth):
         assert f.attrs[NEXT_SEED_ATTR] == 9
 
 
-def test_resume_drops_uncommitted_rows(make_h5, synth):
+def test_resume_writes_over_uncommitted_rows(make_h5, synth):
     path = make_h5((3, 4))
     with h5py.File(path, "a") as f:  # rows of an episode that never got its ep_len entry
         for name in (keys.PIXELS, keys.ACTION, keys.STATE, keys.STEP_IDX, keys.TERMINATED):
@@ -89,8 +203,11 @@ def test_resume_drops_uncommitted_rows(make_h5, synth):
     with HDF5Writer(path) as w:
         w.write_episodes([synth(2, 2)])
     with h5py.File(path, "r") as f:
-        assert f[keys.STATE].shape[0] == 9
-        assert f[keys.STATE][7:, 0].tolist() == [2.0, 2.0]
+        assert f[keys.EP_LEN][:].tolist() == [3, 4, 2]
+        assert f[keys.STATE].shape[0] == 12  # never shrunk (that would rewrite committed rows)
+        assert f[keys.STATE][7:9, 0].tolist() == [2.0, 2.0]
+    ds = HDF5Dataset(path)
+    assert ds.num_rows == 9 and ds.get_col_data(keys.STATE)[7:, 0].tolist() == [2.0, 2.0]
 
 
 @pytest.mark.parametrize(
@@ -217,7 +334,7 @@ def test_readers_see_only_committed_episodes_while_recording(tmp_path, synth):
         counts = []
         stop = time.time() + 0.5
         while time.time() < stop or len(counts) < 5:
-            with h5py.File(path) as f:  # plain h5py while a commit may be under way
+            with h5py.File(path, "r", libver="latest", swmr=True) as f:  # h5py's live reader, mid-commit
                 counts.append(_check_committed(f, synth))
             ds = HDF5Dataset(path)
             n = ds.num_episodes

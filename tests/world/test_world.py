@@ -273,3 +273,19 @@ def test_async_world_close_stops_workers():
     world.close()
     assert not any(p.is_alive() for p in procs)
     world.close()  # idempotent
+
+
+@pytest.mark.parametrize("policy", ["random", "noisy expert"])
+def test_evaluate_with_a_seed_repeats_exactly_on_the_same_world_and_policy(policy):
+    if policy == "random":
+        world = make(2, max_episode_steps=8)
+        world.set_policy(RandomPolicy(seed=1))
+    else:
+        world = swm.World("swm/TwoRoom-v1", num_envs=2, image_shape=(16, 16), max_episode_steps=8, verbose=0)
+        world.set_policy(swm.envs.expert_policy("swm/TwoRoom-v1", noise=2.0, seed=0))
+    first = world.evaluate(episodes=3, seed=5, eval_keys=[keys.STATE])
+    world.evaluate(episodes=2)  # moves the policy's stream on
+    again = world.evaluate(episodes=3, seed=5, eval_keys=[keys.STATE])
+    np.testing.assert_array_equal(first[keys.STATE], again[keys.STATE])
+    other = world.evaluate(episodes=3, seed=6, eval_keys=[keys.STATE])
+    assert not np.array_equal(first[keys.STATE], other[keys.STATE])

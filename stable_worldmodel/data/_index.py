@@ -1,0 +1,95 @@
+"""The episode index of an HDF5 dataset (``ep_len`` / ``ep_offset``), checked before anything trusts it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .. import keys
+from ..errors import DatasetFormatError
+
+
+def not_a_file(path: Path) -> str | None:
+    """What ``path`` is when it exists but is not a regular file ("a folder", "a FIFO"...), else None."""
+    import stat
+
+    try:
+        mode = path.stat().st_mode
+    except FileNotFoundError:
+        return None
+    if stat.S_ISREG(mode):
+        return None
+    return "a folder" if stat.S_ISDIR(mode) else "a FIFO" if stat.S_ISFIFO(mode) else "not a regular file"
+
+
+def check_file(path: Path, owner: str) -> None:
+    """Raise unless ``path`` is a regular file: FileNotFoundError, or DatasetFormatError saying what it is."""
+    what = not_a_file(path)
+    if what is not None:
+        raise DatasetFormatError(f"{owner} requires an .h5 file, got {str(path)!r}, which is {what}")
+    if not path.exists():
+        raise FileNotFoundError(f"{owner} requires an existing .h5 file, got {str(path)!r} (not found)")
+
+
+def _fresh(dset):
+    """``dset`` as it is on disk now: a file opened twice in one process shares HDF5's cached metadata."""
+    if dset.file.swmr_mode:
+        dset.refresh()
+    return dset
+
+
+def read_index(f, path: Path, owner: str = "HDF5Dataset") -> tuple[np.ndarray, np.ndarray, list[str]]:
+    """``(lengths, offsets, columns)`` of open file ``f``, checked: a damaged index raises DatasetFormatError.
+
+    ``ep_len`` / ``ep_offset`` must be 1-D integer datasets (``ep_offset`` may hold one more
+    entry, from a killed commit), lengths positive, episodes in order and not overlapping,
+    and every column a numeric dataset with rows for every episode.
+    """
+    import h5py
+
+    def bad(what: str) -> DatasetFormatError:
+        return DatasetFormatError(f"{owner} requires {what} in {path}")
+
+    index = {}
+    for name in (keys.EP_LEN, keys.EP_OFFSET):
+        dset = f.get(name)
+        if not isinstance(dset, h5py.Dataset):
+            got = "missing" if dset is None else type(dset).__name__
+            raise bad(f"a 1-D integer dataset {name!r} (the episode index), got {got}; columns: {sorted(f)}")
+        if dset.ndim != 1 or not np.issubdtype(dset.dtype, np.integer):
+            raise bad(f"a 1-D integer dataset {name!r}, got shape {dset.shape} of {dset.dtype}")
+        index[name] = _fresh(dset)
+    lengths = index[keys.EP_LEN][:].astype(np.int64)
+    offsets = index[keys.EP_OFFSET][: len(lengths)].astype(np.int64)
+    if len(offsets) != len(lengths):
+        raise bad(f"one ep_offset per ep_len, got {len(offsets)} offsets for {len(lengths)} episodes")
+    if len(lengths):
+        if lengths.min() < 1:
+            ep = int(np.argmin(lengths))
+            raise bad(f"positive episode lengths, got ep_len[{ep}] = {lengths[ep]}")
+        if offsets[0] < 0:
+            raise bad(f"non-negative offsets, got ep_offset[0] = {offsets[0]}")
+        ends = offsets + lengths
+        clash = np.flatnonzero(offsets[1:] < ends[:-1])
+        if len(clash):
+            e = int(clash[0])
+            raise bad(
+                f"episodes in order and not overlapping, got episode {e + 1} at row {offsets[e + 1]} "
+                f"inside episode {e} (rows {offsets[e]}:{ends[e]})"
+            )
+    end = int(offsets[-1] + lengths[-1]) if len(lengths) else 0
+    columns = []
+    for name in f:
+        if name in index:
+            continue
+        dset = f[name]  # not f.items(): it silently skips objects that cannot be opened
+        if isinstance(dset, h5py.Group):
+            continue  # not a column
+        _fresh(dset)
+        if dset.ndim < 1 or not (np.issubdtype(dset.dtype, np.number) or dset.dtype == np.bool_):
+            raise bad(f"numeric columns of one row per step, got {name!r} of shape {dset.shape} and dtype {dset.dtype}")
+        if dset.shape[0] < end:
+            raise bad(f"{end} rows in every column (the episodes need them), got {dset.shape[0]} in {name!r}")
+        columns.append(name)
+    return lengths, offsets, columns
