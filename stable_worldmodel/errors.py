@@ -47,6 +47,10 @@ class DatasetFormatError(SWMError, ValueError):
     """A dataset file that does not have the expected layout."""
 
 
+class ArgumentTypeError(SWMError, TypeError):
+    """An argument of the wrong type where Python expects a TypeError (a dataset index that is not an int...)."""
+
+
 class DatasetBusyError(SWMError, BlockingIOError):
     """A dataset that another writer (named in the message) is writing."""
 

@@ -21,7 +21,7 @@ from typing import Annotated
 
 import typer
 
-from .errors import int_in
+from .errors import int_in, output_dir
 from .pipeline import ImageSizeOpt, MaxStepsOpt, SeedOpt, default_dataset_name
 from .stats import SuccessSummary
 
@@ -127,7 +127,7 @@ def demo(
         from .errors import check_choice
 
         check_choice("world model", model, list_models())
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_dir(out, "swm demo --out")
     con = console()
     name = "demo-" + default_dataset_name(env, "expert")
     total = 5 if learn else 4

@@ -94,3 +94,33 @@ def require(condition: bool, message: str) -> None:
     """Raise :class:`ConfigError` with ``message`` unless ``condition`` holds."""
     if not condition:
         raise ConfigError(message)
+
+
+def output_dir(path, option: str):
+    """``path`` created as a writable folder now, before long work; a ConfigError naming ``option`` otherwise."""
+    from pathlib import Path
+
+    path = Path(path).expanduser()
+    if path.exists() and not path.is_dir():
+        raise ConfigError(f"{option} requires a folder, got {str(path)!r}, which is a file")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ConfigError(f"{option} requires a folder it can create, got {str(path)!r}: {exc.strerror or exc}") from None
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise ConfigError(f"{option} requires a writable folder, got {str(path)!r} (permission denied)")
+    return path
+
+
+def output_file(path, option: str):
+    """``path`` checked as a file that can be written (its folder is created now); ConfigError otherwise."""
+    from pathlib import Path
+
+    path = Path(path).expanduser()
+    if path.is_dir():
+        raise ConfigError(f"{option} requires a file name, got {str(path)!r}, which is a folder")
+    output_dir(path.parent, option)
+    if path.exists() and not os.access(path, os.W_OK):
+        raise ConfigError(f"{option} requires a file it can write, got {str(path)!r} (permission denied)")
+    return path
+

@@ -7,7 +7,7 @@ from typing import Annotated
 
 import typer
 
-from .errors import int_in, require
+from .errors import int_in, output_dir, output_file, require
 
 EnvArg = Annotated[str, typer.Argument(help="Environment id, e.g. swm/TwoRoom-v1 (see `swm envs`).", metavar="ENV", show_default=False)]
 PolicyOpt = Annotated[str, typer.Option("--policy", "-p", metavar="POLICY", help="Policy that acts: random or expert.")]
@@ -47,7 +47,8 @@ def collect(
     Example: swm collect swm/TwoRoom-v1 --episodes 20 --policy expert --name tworoom
     """
     from ..data import dataset_info, delete_dataset
-    from ..data.utils import resolve_dataset_path
+    from ..data._index import not_a_file
+    from ..data.utils import dataset_file
     from .display import console, display_dataset_info
     from .worlds import check_factors, check_policy, make_policy, make_world, recording_noise, reset_options, resolve_env
 
@@ -55,8 +56,9 @@ def collect(
     policy = check_policy(policy)
     noise = recording_noise(policy, env, noise)
     name = name or default_dataset_name(env, policy)
-    require(bool(name.strip()) and "/" not in name and "\\" not in name, f"swm collect requires a plain dataset name (no path), got {name!r}")
-    path = resolve_dataset_path(name)
+    path = dataset_file(name)  # a name under the cache folder (sub-folders allowed), checked
+    what = not_a_file(path)
+    require(what is None, f"swm collect requires {str(path)!r} to be a dataset file, got {what}; pick another --name")
     out = console()
     if path.exists():
         if overwrite:
@@ -104,6 +106,10 @@ def eval_cmd(
 
     env = resolve_env(env)
     policy = check_policy(policy)
+    if video is not None:
+        video = output_dir(video, "swm eval --video")
+    if json_path is not None:
+        json_path = output_file(json_path, "swm eval --json")
     plan = None
     if policy.startswith("wm:"):
         from ..planning.learned import PlanSettings
@@ -122,7 +128,6 @@ def eval_cmd(
     if json_path is not None:
         import json
 
-        json_path.parent.mkdir(parents=True, exist_ok=True)
         json_path.write_text(json.dumps(record, indent=2) + "\n")
         out.print(f"Results: {json_path}", soft_wrap=True)
 

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from .. import keys
-from ..errors import ConfigError, unknown_name
+from ..errors import ArgumentTypeError, ConfigError, unknown_name
 from ._ipc import prepare_worker
 
 logger = logging.getLogger(__name__)
@@ -68,9 +68,27 @@ class Dataset(_TorchDataset):
         owner = type(self).__name__
         self.frameskip = _positive("frameskip", frameskip, owner)
         self.num_steps = _positive("num_steps", num_steps, owner)
+        if transform is not None and not callable(transform):
+            raise ConfigError(f"{owner} requires transform to be a callable (item dict -> item dict) or None, got {transform!r}")
         self.transform = transform
-        self._keys_to_load = None if keys_to_load is None else list(keys_to_load)
+        if keys_to_load is not None:
+            if isinstance(keys_to_load, (str, bytes)):
+                raise ConfigError(f"{owner} requires keys_to_load to be a list of column names, got the string {keys_to_load!r}; write [{keys_to_load!r}]")
+            keys_to_load = list(keys_to_load)
+            if not keys_to_load or not all(isinstance(k, str) for k in keys_to_load):
+                raise ConfigError(f"{owner} requires keys_to_load to be a non-empty list of column names (or None for all), got {keys_to_load!r}")
+        self._keys_to_load = keys_to_load
         self._index: tuple[np.ndarray, np.ndarray] | None = None
+
+    def check_span(self) -> None:
+        """Raise unless some episode is long enough for one sample (``num_steps * frameskip`` rows)."""
+        lengths = np.asarray(self.lengths)
+        if len(lengths) and int(lengths.max()) < self.span:
+            raise ConfigError(
+                f"{type(self).__name__} requires num_steps * frameskip <= the longest episode ({int(lengths.max())} rows), "
+                f"got num_steps={self.num_steps} * frameskip={self.frameskip} = {self.span}: no sample fits; "
+                "lower num_steps (history) / frameskip or record longer episodes"
+            )
 
     # -- to implement (or set ``_columns``, ``_lengths`` and ``_offsets`` in ``__init__``) -----
     @property
@@ -135,7 +153,7 @@ class Dataset(_TorchDataset):
     def locate(self, idx: int) -> tuple[int, int]:
         """``(episode, step)`` of the first row of sample ``idx``."""
         if isinstance(idx, bool) or not isinstance(idx, (int, np.integer)):
-            raise TypeError(f"{type(self).__name__} indices must be ints, got {type(idx).__name__}")
+            raise ArgumentTypeError(f"{type(self).__name__} indices must be ints, got {idx!r} ({type(idx).__name__})")
         cum, _ = self._sample_index()
         n = int(cum[-1])
         i = int(idx) + n if idx < 0 else int(idx)
@@ -180,7 +198,7 @@ class Dataset(_TorchDataset):
         """Columns of the samples ``indices`` as ``(B, T, ...)`` tensors (images ``(B, T, C, H, W)``)."""
         idx = np.asarray(indices)
         if idx.ndim != 1 or not idx.size or not np.issubdtype(idx.dtype, np.integer):
-            raise TypeError(f"{type(self).__name__} indices must be ints, got {indices!r}")
+            raise ArgumentTypeError(f"{type(self).__name__} indices must be ints, got {indices!r}")
         eps, steps = self._locate_many(idx.astype(np.int64))
         starts = self._sample_index()[1][eps] + steps
         cols = {col: self._read_windows(col, starts) for col in self.keys_to_load}
@@ -218,6 +236,8 @@ class Dataset(_TorchDataset):
     def load_episode(self, ep: int) -> dict[str, Any]:
         """Every loaded column of episode ``ep`` as tensors ``(L, ...)`` (images ``(L, C, H, W)``)."""
         lengths = self.lengths
+        if isinstance(ep, bool) or not isinstance(ep, (int, np.integer)):
+            raise ArgumentTypeError(f"{type(self).__name__}.load_episode requires an int episode index, got {ep!r} ({type(ep).__name__})")
         if not -len(lengths) <= ep < len(lengths):
             raise IndexError(f"{type(self).__name__} episode {ep} out of range for {len(lengths)} episodes")
         start = int(self.offsets[ep])

@@ -171,6 +171,7 @@ class HDF5Dataset(Dataset):
             raise
         if keys_to_load is not None:
             self.check_keys(keys_to_load)
+        self.check_span()
         self._cache: dict[str, np.ndarray] = {}
         end = self._end
         to_cache = self.check_keys(list(keys_to_cache or []))

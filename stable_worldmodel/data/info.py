@@ -60,8 +60,15 @@ def list_datasets() -> list[str]:
     from .folder import META
 
     root = get_cache_dir()
-    names = {p.stem for p in root.glob("*.h5")} | {p.parent.name for p in root.glob(f"*/{META}")}
+    names = {p.relative_to(root).with_suffix("").as_posix() for p in root.rglob("*.h5") if p.is_file() and not _hidden(p, root)}
+    names |= {p.parent.name for p in root.glob(f"*/{META}")}
     return sorted(names)
+
+
+def _hidden(path: Path, root: Path) -> bool:
+    """Under a folder or named with a leading dot (partial files, locks), or under checkpoints/."""
+    parts = path.relative_to(root).parts
+    return any(p.startswith(".") for p in parts) or parts[0] == "checkpoints"
 
 
 def _dataset_path(name: str) -> Path:

@@ -10,6 +10,7 @@ import numpy as np
 
 from .. import keys
 from ..errors import ConfigError, unknown_name
+from .checks import check_seed
 
 if TYPE_CHECKING:
     from .world import World
@@ -48,6 +49,7 @@ def evaluate(world: World, episodes: int = 10, eval_keys=None, seed: int | None 
         raise ConfigError(f"World.evaluate requires episodes to be an integer >= 1, got {episodes!r}")
     if world.policy is None:
         raise RuntimeError("World.evaluate requires a policy: call world.set_policy(policy) first")
+    seed = check_seed("World.evaluate", seed)
     eval_keys = list(eval_keys or [])
     seeds = episode_seeds(world, episodes, seed)
     reseed_policy(world.policy, seed)

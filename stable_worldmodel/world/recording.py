@@ -82,13 +82,15 @@ def record_dataset(
     :mod:`stable_worldmodel.data.writer`), so an interrupted recording keeps what it wrote.
     Returns the file path.
     """
-    from ..data.utils import resolve_dataset_path
+    from ..data.utils import dataset_file
     from ..data.writer import HDF5Writer
+    from .checks import check_seed
     from .evaluate import reseed_policy
 
     if isinstance(episodes, bool) or not isinstance(episodes, (int, np.integer)) or episodes < 1:
         raise ConfigError(f"record_dataset requires episodes to be a positive int, got {episodes!r}")
-    path = resolve_dataset_path(dataset_name, cache_dir)
+    seed = check_seed("World.record_dataset", seed)
+    path = dataset_file(dataset_name, cache_dir)
     n = int(world.num_envs)
     with HDF5Writer(path) as writer:
         if writer.next_seed is not None:

@@ -16,6 +16,7 @@ from ..envs._registry import check_env_id
 from ..errors import ConfigError
 from ..wrapper import MegaWrapper
 from ..wrapper._image import check_shape
+from .checks import check_env_kwargs, check_reset_options, check_seed, check_seeds
 from .evaluate import evaluate as _evaluate
 from .vector import VecEnv
 
@@ -96,13 +97,14 @@ class World:
         self.history_size = _positive_int("history_size", history_size)
         self.frame_skip = _positive_int("frame_skip", frame_skip)
         self.max_episode_steps = _positive_int("max_episode_steps", max_episode_steps)
-        self.seed = seed
+        self.seed = check_seed("World", seed)
         self.verbose = verbose
         self.goal_conditioned = goal_conditioned
         mode = kwargs.pop("vectorization_mode", "auto")
         # seed 000's World took goal_shape; keep accepting it (goal images at another size)
         goal_shape = kwargs.pop("goal_shape", None)
         goal_shape = check_shape("World goal_shape", goal_shape) if goal_shape is not None else None
+        check_env_kwargs(env_name, kwargs)
         factory = partial(
             make_world_env,
             env_name,
@@ -163,23 +165,15 @@ class World:
         return [int(s) for s in self._rng.integers(0, 2**31 - 1, size=n)]
 
     def _seeds(self, seed: int | Sequence[int] | None, n: int) -> list[int]:
+        seed = check_seeds("World.reset", seed, n)
         if seed is None:
             return self.draw_seeds(n)
-        if isinstance(seed, (int, np.integer)) and not isinstance(seed, bool):
-            return [int(seed) + i for i in range(n)]
-        seeds = list(seed)
-        if len(seeds) != n:
-            raise ConfigError(f"World.reset requires one seed per env ({n}), got {len(seeds)} seeds: {seeds}")
-        return [int(s) for s in seeds]
+        if isinstance(seed, int):
+            return [seed + i for i in range(n)]
+        return seed
 
-    @staticmethod
-    def _options(options: dict | Sequence[dict | None] | None, n: int) -> list[dict | None]:
-        if options is None or isinstance(options, dict):
-            return [options] * n
-        options = list(options)
-        if len(options) != n:
-            raise ConfigError(f"World.reset requires one options dict per env ({n}) when given a list, got {len(options)}")
-        return options
+    def _options(self, options: dict | Sequence[dict | None] | None, n: int) -> list[dict | None]:
+        return check_reset_options(options, n, self.single_observation_space)
 
     # -- env API ---------------------------------------------------------------------------
     def reset(self, seed: int | list[int] | None = None, options: dict | list[dict] | None = None) -> None:
@@ -192,7 +186,12 @@ class World:
         from .batching import set_rows
 
         ids = self._vec.check_ids(list(env_ids))
-        seeds = self.draw_seeds(len(ids)) if seeds is None else list(seeds)
+        if seeds is None:
+            seeds = self.draw_seeds(len(ids))
+        elif isinstance(seeds, (Sequence, np.ndarray)) and not isinstance(seeds, str):
+            seeds = [check_seed("World.reset_envs", s) for s in seeds]
+        else:
+            raise ConfigError(f"World.reset_envs requires one seed per env id ({len(ids)}) or None, got {seeds!r}")
         if len(seeds) != len(ids):
             raise ConfigError(f"World.reset_envs requires one seed per env id ({len(ids)}), got {len(seeds)}")
         opts = self._options(options, len(ids))

@@ -17,13 +17,19 @@ def resize(img: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
 
 
 def check_shape(name: str, shape) -> tuple[int, int]:
-    """Validate an (H, W) pair and return it as a tuple of ints."""
+    """Validate an (H, W) pair of positive integers and return it as a tuple of ints."""
     from ..errors import ConfigError
 
-    try:
-        h, w = (int(s) for s in tuple(shape)[:2])
-    except (TypeError, ValueError):
-        raise ConfigError(f"{name} requires an (H, W) pair of positive integers, got {shape!r}") from None
-    if h <= 0 or w <= 0:
-        raise ConfigError(f"{name} requires an (H, W) pair of positive integers, got {shape!r}")
-    return h, w
+    def bad(why: str = "") -> ConfigError:
+        return ConfigError(f"{name} requires an (H, W) pair of positive integers such as (64, 64), got {shape!r}{why}")
+
+    if isinstance(shape, (str, bytes)) or not hasattr(shape, "__len__"):
+        raise bad()
+    if len(shape) != 2:
+        raise bad(" (images are (H, W, 3): give only (H, W))" if len(shape) == 3 else "")
+    out = []
+    for s in shape:
+        if isinstance(s, (bool, np.bool_)) or not isinstance(s, (int, np.integer)) or s <= 0:
+            raise bad()
+        out.append(int(s))
+    return out[0], out[1]

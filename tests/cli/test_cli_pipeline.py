@@ -88,7 +88,7 @@ def test_collect_noise_needs_an_expert_that_takes_it(swm, error_line):
         (("swm/Toyy-v0",), ["'swm/Toyy-v0'", "swm/Toy-v0"]),
         ((TOY, "--policy", "expret"), ["'expret'", "Did you mean 'expert'", "random"]),
         ((TOY, "--variation", "agent.colr"), ["'agent.colr'", "agent.color", "all"]),
-        ((TOY, "--name", "a/b"), ["'a/b'"]),
+        ((TOY, "--name", "a/../../b"), ["'a/../../b'", "would leave the cache folder"]),
     ],
 )
 def test_collect_bad_input_writes_nothing(swm, error_line, args, needles):

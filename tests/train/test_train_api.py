@@ -282,7 +282,7 @@ def test_dataset_without_a_needed_column(refused, write_dataset, missing):
 
 def test_episodes_shorter_than_a_window(refused, write_dataset):
     name = write_dataset("short", lengths=(2, 2, 2))  # lewm's windows are history 2 + 1 prediction = 3 rows
-    refused(DatasetFormatError, r"at least num_steps \* frameskip = 3 \* 1 = 3 steps, .*\(longest: 2\)", dataset=name)
+    refused(ConfigError, r"num_steps \* frameskip <= the longest episode \(2 rows\), got num_steps=3 \* frameskip=1 = 3", dataset=name)
 
 
 def test_images_with_other_channels_than_the_model(refused):
