@@ -76,6 +76,8 @@ class PlanConfig:
                 f"PlanConfig requires receding_horizon <= horizon, got receding_horizon={self.receding_horizon} "
                 f"and horizon={self.horizon}"
             )
+        if not isinstance(self.warm_start, (bool, np.bool_)):
+            raise ConfigError(f"PlanConfig requires warm_start to be a bool (True or False), got {self.warm_start!r}")
 
     @property
     def plan_len(self) -> int:

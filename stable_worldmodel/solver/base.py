@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import logging
 import math
+import numbers
 from collections.abc import Iterator
 from typing import Any
 
@@ -16,7 +17,7 @@ import gymnasium as gym
 import numpy as np
 import torch
 
-from ..errors import ConfigError, SpaceError
+from ..errors import ConfigError, SpaceError, did_you_mean
 from ._heap import raise_trim_threshold
 
 logger = logging.getLogger(__name__)
@@ -41,6 +42,7 @@ class _AutoBatch(int):
 
 AUTO_BATCH = _AutoBatch(1)
 _OOM = getattr(torch, "OutOfMemoryError", torch.cuda.OutOfMemoryError)
+_DEVICE_FORMS = '"cpu", "cuda", "cuda:0", "mps", a torch.device, or None (follow the model)'
 
 
 def _model_tensor(model: Any) -> torch.Tensor | None:
@@ -72,6 +74,8 @@ class BaseSolver:
     #: run :meth:`_optimize` under ``torch.inference_mode()`` (no autograd bookkeeping, cheaper
     #: per op than ``no_grad``); for solvers that never differentiate through the model
     _inference_mode: bool = False
+    #: ``topk`` is the number of elites and cannot be None (CEM, iCEM, MPPI)
+    _uses_topk: bool = False
 
     def __init__(
         self,
@@ -86,17 +90,14 @@ class BaseSolver:
     ):
         if not callable(getattr(model, "get_cost", None)):
             raise ConfigError(f"{type(self).__name__} requires a model with get_cost(info, candidates), got {model!r}")
-        if batch_size is not None and (isinstance(batch_size, bool) or int(batch_size) < 1):
-            raise ConfigError(f"{type(self).__name__} requires batch_size >= 1 or None, got {batch_size!r}")
-        self._check_positive(num_samples=num_samples, n_steps=n_steps, topk=num_samples if topk is None else topk)
-        if not var_scale > 0:
-            raise ConfigError(f"{type(self).__name__} requires var_scale > 0, got {var_scale!r}")
+        self._check_common(batch_size=batch_size, num_samples=num_samples, n_steps=n_steps, topk=topk, device=device)
+        var_scale = self._check_number("var_scale", var_scale, minimum=0.0, strict=True)
         self.model = model
         self.batch_size = batch_size
         self.num_samples = int(num_samples)
-        self.var_scale = float(var_scale)
+        self.var_scale = var_scale
         self.n_steps = int(n_steps)
-        self.topk = min(int(topk), self.num_samples) if topk is not None else None
+        self.topk = int(topk) if topk is not None else None
         self._device_arg = device
         self.seed = seed
         self._seed_rng = np.random.default_rng(seed)
@@ -110,11 +111,81 @@ class BaseSolver:
         self._row_starts: tuple = (None, None)
         self._solve_seed = 0
 
-    # -- validation helper ------------------------------------------------------------
+    # -- validation helpers (constructors of every solver) --------------------------------
     def _check_positive(self, **values: Any) -> None:
+        """ConfigError unless every value is an integer >= 1 (bools refused)."""
         for key, value in values.items():
-            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+            if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 1:
                 raise ConfigError(f"{type(self).__name__} requires {key} to be an integer >= 1, got {value!r}")
+
+    def _check_number(
+        self,
+        name: str,
+        value: Any,
+        *,
+        minimum: float | None = None,
+        strict: bool = False,
+        maximum: float | None = None,
+        strict_max: bool = True,
+    ) -> float:
+        """``value`` as a float; ConfigError unless it is a finite real number in the given range.
+
+        ``minimum``/``maximum`` bound it (``strict`` excludes the minimum, ``strict_max`` the maximum).
+        Bools, strings, NaN and infinities are refused; one-element tensors are read.
+        """
+        number: Any = value
+        if isinstance(value, torch.Tensor) and value.numel() == 1 and value.dtype != torch.bool:
+            number = value.item()
+        if minimum is None:
+            rule = "" if maximum is None else f" {'<' if strict_max else '<='} {maximum:g}"
+        elif maximum is None:
+            rule = f" {'>' if strict else '>='} {minimum:g}"
+        else:
+            rule = f" in {'(' if strict else '['}{minimum:g}, {maximum:g}{')' if strict_max else ']'}"
+        ok = isinstance(number, numbers.Real) and not isinstance(number, (bool, np.bool_)) and math.isfinite(number)
+        if ok:
+            number = float(number)
+            if minimum is not None and (number < minimum or (strict and number == minimum)):
+                ok = False
+            if maximum is not None and (number > maximum or (strict_max and number == maximum)):
+                ok = False
+        if not ok:
+            raise ConfigError(f"{type(self).__name__} requires {name} to be a finite number{rule}, got {value!r}")
+        return number
+
+    def _check_common(self, *, batch_size: Any, num_samples: Any, n_steps: Any, topk: Any, device: Any) -> None:
+        """The arguments every solver shares: counts, ``topk <= num_samples``, ``batch_size`` and ``device``."""
+        name = type(self).__name__
+        self._check_positive(num_samples=num_samples, n_steps=n_steps)
+        if topk is not None or self._uses_topk:
+            self._check_positive(topk=topk)
+            if topk > num_samples:
+                raise ConfigError(
+                    f"{name} requires topk <= num_samples (the elites are drawn from the samples), got "
+                    f"topk={topk!r} and num_samples={num_samples!r}; pass topk={num_samples} or less, "
+                    "or raise num_samples"
+                )
+        if batch_size is not None and batch_size is not AUTO_BATCH:
+            integer = isinstance(batch_size, (int, np.integer)) and not isinstance(batch_size, (bool, np.bool_))
+            if not integer or batch_size < 1:
+                raise ConfigError(
+                    f"{name} requires batch_size to be an integer >= 1 or None (all envs in one pass), "
+                    f"got {batch_size!r}"
+                )
+        if device is None or isinstance(device, torch.device):
+            return
+        if isinstance(device, (int, np.integer)) and not isinstance(device, (bool, np.bool_)) and device >= 0:
+            return  # an accelerator index; torch.device(0) itself already needs the accelerator
+        try:
+            if not isinstance(device, str):
+                raise TypeError(f"{type(device).__name__} is not a device")
+            torch.device(device)  # parses only: a CUDA device without CUDA fails later, in configure
+        except (RuntimeError, ValueError, TypeError) as exc:
+            hint = ""
+            if isinstance(device, str):
+                hint = did_you_mean(device.lower(), ("cpu", "cuda", "mps", "xpu", "meta"), n=1)
+            hint = "." + hint if hint else ""
+            raise ConfigError(f"{name} requires device as {_DEVICE_FORMS}, got {device!r}{hint}") from exc
 
     # -- configuration -----------------------------------------------------------------
     def configure(self, *, action_space: gym.Space, n_envs: int, config: Any) -> None:

@@ -39,6 +39,7 @@ class CEMSolver(BaseSolver):
     """
 
     _inference_mode = True
+    _uses_topk = True
 
     def __init__(
         self,

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 import torch
@@ -38,11 +39,21 @@ class GradientSolver(BaseSolver):
         optimizer_kwargs: dict | None = None,
     ) -> None:
         super().__init__(model, batch_size, num_samples, var_scale, device, seed, n_steps)
-        if action_noise < 0:
-            raise ConfigError(f"{type(self).__name__} requires action_noise >= 0, got {action_noise!r}")
-        self.action_noise = float(action_noise)
-        self.optimizer_cls = optimizer_cls
+        self.action_noise = self._check_number("action_noise", action_noise, minimum=0.0)
+        if not callable(optimizer_cls):
+            raise ConfigError(
+                f"{type(self).__name__} requires optimizer_cls to be a torch optimizer class (e.g. torch.optim.Adam), "
+                f"got {optimizer_cls!r}"
+            )
+        if optimizer_kwargs is not None and not isinstance(optimizer_kwargs, Mapping):
+            raise ConfigError(
+                f"{type(self).__name__} requires optimizer_kwargs to be a dict (e.g. {{'lr': 0.1}}) or None, "
+                f"got {optimizer_kwargs!r}"
+            )
         self.optimizer_kwargs = {"lr": 0.1} if optimizer_kwargs is None else dict(optimizer_kwargs)
+        if "lr" in self.optimizer_kwargs:  # the learning rate: 0 freezes the plans, negative or NaN ascends/breaks
+            self._check_number("optimizer_kwargs['lr'] (the learning rate)", self.optimizer_kwargs["lr"], minimum=0.0)
+        self.optimizer_cls = optimizer_cls
 
     # -- hooks for relaxations (see discrete_solvers.PGDSolver) ------------------------------
     def _init_variable(self, init_action: torch.Tensor | None) -> torch.Tensor:

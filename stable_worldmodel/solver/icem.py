@@ -6,7 +6,6 @@ from typing import Any
 
 import torch
 
-from ..errors import ConfigError
 from ._registry import register_solver
 from .base import AUTO_BATCH, BaseSolver
 
@@ -51,6 +50,7 @@ class ICEMSolver(BaseSolver):
     """
 
     _inference_mode = True
+    _uses_topk = True
 
     def __init__(
         self,
@@ -67,12 +67,10 @@ class ICEMSolver(BaseSolver):
         seed: int = 1234,
     ) -> None:
         super().__init__(model, batch_size, num_samples, var_scale, device, seed, n_steps, topk)
-        for key, value in (("elite_keep_frac", elite_keep_frac), ("momentum", momentum)):
-            if not 0 <= value < 1:
-                raise ConfigError(f"ICEMSolver requires 0 <= {key} < 1, got {value!r}")
-        if noise_beta < 0:
-            raise ConfigError(f"ICEMSolver requires noise_beta >= 0, got {noise_beta!r}")
-        self.noise_beta, self.momentum = float(noise_beta), float(momentum)
+        elite_keep_frac = self._check_number("elite_keep_frac", elite_keep_frac, minimum=0.0, maximum=1.0)
+        momentum = self._check_number("momentum", momentum, minimum=0.0, maximum=1.0)
+        self.noise_beta = self._check_number("noise_beta", noise_beta, minimum=0.0)
+        self.momentum = momentum
         self.n_keep = int(elite_keep_frac * self.topk)
 
     def _optimize(self, info: dict, init_action: torch.Tensor | None) -> dict:

@@ -6,7 +6,6 @@ from typing import Any
 
 import torch
 
-from ..errors import ConfigError
 from ._registry import register_solver
 from .base import AUTO_BATCH, BaseSolver
 
@@ -26,6 +25,7 @@ class MPPISolver(BaseSolver):
     """
 
     _inference_mode = True
+    _uses_topk = True
 
     def __init__(
         self,
@@ -40,9 +40,7 @@ class MPPISolver(BaseSolver):
         seed: int = 1234,
     ) -> None:
         super().__init__(model, batch_size, num_samples, var_scale, device, seed, n_steps, topk)
-        if not temperature > 0:
-            raise ConfigError(f"MPPISolver requires temperature > 0, got {temperature!r}")
-        self.temperature = float(temperature)
+        self.temperature = self._check_number("temperature", temperature, minimum=0.0, strict=True)
 
     def _optimize(self, info: dict, init_action: torch.Tensor | None) -> dict:
         mean, std, info_s = self._gaussian_start(info, init_action)

@@ -10,7 +10,7 @@ import gymnasium as gym
 import numpy as np
 
 from ..errors import SpaceError, did_you_mean, unknown_name
-from ._leaf import StatefulSpaceMixin, rejection_sample, short_repr
+from ._leaf import StatefulSpaceMixin, constraint_verdict, rejection_sample, short_repr
 
 logger = logging.getLogger(__name__)
 
@@ -242,7 +242,13 @@ class Dict(gym.spaces.Dict):
             return False
         if not all(space.contains(x[key]) for key, space in self.spaces.items()):
             return False
-        return self.constrain_fn is None or bool(self.constrain_fn(x))
+        return self._satisfies(x)
+
+    def _satisfies(self, value: Mapping[str, Any]) -> bool:
+        """``constrain_fn(value)`` (True without one); SpaceError when it does not return a bool."""
+        if self.constrain_fn is None:
+            return True
+        return constraint_verdict(f"Dict with keys {list(self.spaces)}", self.constrain_fn, self.constrain_fn(value))
 
     def _failures(self, prefix: str = "") -> Iterator[str]:
         for key, space in self.spaces.items():
@@ -250,7 +256,7 @@ class Dict(gym.spaces.Dict):
                 yield from space._failures(f"{prefix}{key}.")
             elif not space.contains(space._value):
                 yield prefix + key
-        if self.constrain_fn is not None and not self.constrain_fn(self.value):
+        if not self._satisfies(self.value):
             yield f"{prefix or '<root>'} (constrain_fn)"
 
     def check(self, debug: bool = False) -> bool:
@@ -341,7 +347,7 @@ class Dict(gym.spaces.Dict):
                 sub_args, sub_kwargs = _route(args, kwargs, key)
                 self.spaces[key]._sample_in_place(sub, sub_args, sub_kwargs, max_tries, warn_after_s)
 
-        accept = None if self.constrain_fn is None else (lambda _: bool(self.constrain_fn(self.value)))
+        accept = None if self.constrain_fn is None else (lambda _: self._satisfies(self.value))
         rejection_sample(self, draw, accept, max_tries, warn_after_s)
 
     @staticmethod

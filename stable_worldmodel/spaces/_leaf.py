@@ -63,6 +63,68 @@ def short_repr(x: Any) -> str:
     return repr(x.item()) if isinstance(x, np.generic) else repr(x)
 
 
+def constraint_verdict(owner: str, fn: Callable[[Any], Any], result: Any) -> bool:
+    """``result`` of ``constrain_fn`` as a bool; SpaceError unless it is a bool or a numpy bool scalar.
+
+    A multi-element array has no truth value and a one-element one hides a shape bug, so both
+    are refused rather than guessed at.
+    """
+    if isinstance(result, (bool, np.bool_)):
+        return bool(result)
+    name = getattr(fn, "__qualname__", None) or repr(fn)
+    shape = f" with shape {result.shape}" if isinstance(result, np.ndarray) else ""
+    raise SpaceError(
+        f"{owner} requires constrain_fn to return a bool, got {short_repr(result)} ({type(result).__name__}{shape}) "
+        f"from {name}; return bool(...) or reduce an array with np.all(...) / np.any(...)"
+    )
+
+
+def _arg(args: tuple, kwargs: dict, index: int, name: str) -> Any:
+    """The constructor argument ``name`` (keyword, else positional ``index``), or None when absent."""
+    if name in kwargs:
+        return kwargs[name]
+    return args[index] if len(args) > index else None
+
+
+def _check_box_bounds(cls: str, low: Any, high: Any) -> None:
+    """SpaceError for non-numeric or NaN bounds and for low > high anywhere (before gymnasium sees them)."""
+    if low is None or high is None:
+        return  # a missing argument: gymnasium's own TypeError says which
+    try:
+        lo, hi = np.asarray(low, dtype=np.float64), np.asarray(high, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise SpaceError(f"{cls} requires numeric low and high, got low={low!r}, high={high!r}") from exc
+    for side, arr, raw in (("low", lo, low), ("high", hi, high)):
+        if np.isnan(arr).any():
+            raise SpaceError(
+                f"{cls} requires {side} without NaN, got {side}={short_repr(raw)}; "
+                "use -np.inf / np.inf for an unbounded side"
+            )
+    try:
+        lo_b, hi_b = np.broadcast_arrays(lo, hi)
+    except ValueError:
+        return  # shapes that do not fit: reported by gymnasium, wrapped in __init__
+    bad = lo_b > hi_b
+    if bad.any():
+        where = tuple(int(i) for i in np.argwhere(bad)[0])
+        at = f" (at index {where}: {lo_b[where].item()!r} > {hi_b[where].item()!r})" if where else ""
+        raise SpaceError(
+            f"{cls} requires low <= high everywhere, got low={short_repr(low)} and high={short_repr(high)}{at}; "
+            "swap or fix the bounds"
+        )
+
+
+def _gym_init(cls: str, init: Callable[..., None], args: tuple, kwargs: dict) -> None:
+    """``init(*args, **kwargs)`` (the Gymnasium constructor) with its ValueErrors raised as SpaceError."""
+    try:
+        init(*args, **kwargs)
+    except SpaceError:
+        raise
+    except ValueError as exc:
+        shown = ", ".join([*(short_repr(a) for a in args), *(f"{k}={short_repr(v)}" for k, v in kwargs.items())])
+        raise SpaceError(f"{cls} requires arguments that Gymnasium accepts, got ({shown}): {exc}") from exc
+
+
 class StatefulSpaceMixin:
     """Value, init value, constraint and rejection sampling shared by the leaf spaces.
 
@@ -152,7 +214,9 @@ class StatefulSpaceMixin:
 
     # -- membership ---------------------------------------------------------------------------
     def _satisfies(self, x: Any) -> bool:
-        return self.constrain_fn is None or bool(self.constrain_fn(x))
+        if self.constrain_fn is None:
+            return True
+        return constraint_verdict(repr(self), self.constrain_fn, self.constrain_fn(x))
 
     def contains(self, x: Any) -> bool:
         """True when ``x`` is inside the bounds and satisfies ``constrain_fn``."""
@@ -227,7 +291,8 @@ class Box(StatefulSpaceMixin, gym.spaces.Box):
     """
 
     def __init__(self, *args: Any, init_value: Any = None, constrain_fn: Callable | None = None, **kwargs: Any):
-        super().__init__(*args, **kwargs)
+        _check_box_bounds(type(self).__name__, _arg(args, kwargs, 0, "low"), _arg(args, kwargs, 1, "high"))
+        _gym_init(type(self).__name__, super().__init__, args, kwargs)
         self._fast: tuple[np.ndarray, np.ndarray] | None = None
         self._integer = bool(np.issubdtype(self.dtype, np.integer))
         if self.is_bounded("both") and np.issubdtype(self.dtype, np.number):
@@ -278,7 +343,12 @@ class Discrete(StatefulSpaceMixin, gym.spaces.Discrete):
     _scalar_value = True
 
     def __init__(self, *args: Any, init_value: Any = None, constrain_fn: Callable | None = None, **kwargs: Any):
-        super().__init__(*args, **kwargs)
+        n = _arg(args, kwargs, 0, "n")
+        if n is not None and (isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)) or n < 1):
+            raise SpaceError(
+                f"{type(self).__name__} requires n to be an integer >= 1 (the number of elements), got {n!r}"
+            )
+        _gym_init(type(self).__name__, super().__init__, args, kwargs)
         self._setup_state(init_value, constrain_fn)
 
     def _default_value(self) -> np.int64:
@@ -296,7 +366,23 @@ class MultiDiscrete(StatefulSpaceMixin, gym.spaces.MultiDiscrete):
     """
 
     def __init__(self, *args: Any, init_value: Any = None, constrain_fn: Callable | None = None, **kwargs: Any):
-        super().__init__(*args, **kwargs)
+        nvec = _arg(args, kwargs, 0, "nvec")
+        if nvec is not None:
+            need = f"{type(self).__name__} requires nvec as an array of integers >= 1"
+            try:
+                arr = np.asarray(nvec)
+            except (TypeError, ValueError) as exc:
+                raise SpaceError(f"{need}, got {nvec!r}") from exc
+            if not np.issubdtype(arr.dtype, np.number) or np.issubdtype(arr.dtype, np.complexfloating):
+                raise SpaceError(f"{need}, got {short_repr(nvec)}")
+            with np.errstate(invalid="ignore"):
+                bad = ~(arr >= 1) | (arr != np.floor(arr))  # NaN fails both tests
+            if bad.any():
+                raise SpaceError(
+                    f"{type(self).__name__} requires every nvec entry to be an integer >= 1 (the number of choices), "
+                    f"got nvec={short_repr(arr)} with bad entries {short_repr(arr[bad])}"
+                )
+        _gym_init(type(self).__name__, super().__init__, args, kwargs)
         self._setup_state(init_value, constrain_fn)
 
     def _default_value(self) -> np.ndarray:
