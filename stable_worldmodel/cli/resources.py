@@ -38,11 +38,10 @@ PROTOCOL_ROWS = (
 
 
 def _list_models() -> list[str]:
-    """Checkpoint folders (relative to ``checkpoints/``) and pickled checkpoint names, sorted."""
-    from .. import data
-    from ..wm.utils import list_checkpoints
+    """Exactly the names ``AutoCostModel`` / ``swm eval --policy wm:NAME`` accept, sorted."""
+    from ..planning.auto import list_model_checkpoints
 
-    return sorted(set(data.list_models()) | set(list_checkpoints()))
+    return list_model_checkpoints()
 
 
 def _lister(kind: str) -> Callable[[], list[str]]:
@@ -60,10 +59,15 @@ def _checkpoint_folder(name: str) -> Path | None:
 
 
 def _pickled_files(name: str) -> list[Path]:
-    """The ``<name>_object.ckpt`` / ``<name>_weights*.ckpt`` files of an older checkpoint."""
-    from ..data.info import _model_files  # the one place that knows the older file names
+    """The pickled checkpoint ``AutoCostModel(name)`` would load (``[]`` when there is none)."""
+    from ..data import get_cache_dir
+    from ..planning.auto import _pickled_names, _pickled_path
 
-    return sorted(_model_files().get(name, []))
+    root = get_cache_dir()
+    if name not in _pickled_names(root):
+        return []
+    path = _pickled_path(name, root)
+    return [path] if path is not None else []
 
 
 def _entry_size(path: Path) -> int:
@@ -155,7 +159,10 @@ def delete_model(name: str) -> list[Path]:
     if folder is not None:
         shutil.rmtree(folder)
         removed.append(folder)
-    if name in data.list_models():
+    for path in _pickled_files(name):
+        path.unlink()
+        removed.append(path)
+    if name in data.list_models():  # the <name>_weights*.ckpt files kept beside an older pickle
         removed += data.delete_model(name)
     return removed
 
@@ -179,6 +186,12 @@ def list_cmd(kind: Annotated[str, typer.Argument(help="What to list: model, data
     note = None if kind == "world" else str(get_cache_dir())
     title = {"model": "Cached models", "dataset": "Cached datasets", "world": "Worlds"}[kind]
     names_table(title, sorted(_lister(kind)()), note)
+    if kind == "dataset":
+        from ..data.info import leftover_partials
+        from .display import console
+
+        for path in leftover_partials():
+            console().print(f"Unfinished first recording (no episode committed): {path}", soft_wrap=True)
 
 
 def show(

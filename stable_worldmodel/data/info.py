@@ -65,6 +65,27 @@ def list_datasets() -> list[str]:
     return sorted(names)
 
 
+def leftover_partials() -> list[Path]:
+    """``.<name>.h5.partial`` files of first recordings that were killed (none is being written now).
+
+    They hold no committed episode (a new file is renamed into place once valid); a later
+    recording of the same name replaces them, :func:`delete_dataset` removes them.
+    """
+    from ..errors import DatasetBusyError
+    from ._lock import WriterLock
+
+    root = get_cache_dir()
+    found = []
+    for path in sorted(root.rglob(".*.h5.partial")):
+        final = path.with_name(path.name[1 : -len(".partial")])
+        try:
+            WriterLock(final).acquire().release()
+        except DatasetBusyError:
+            continue  # a recording is creating it right now
+        found.append(path)
+    return found
+
+
 def _hidden(path: Path, root: Path) -> bool:
     """Under a folder or named with a leading dot (partial files, locks), or under checkpoints/."""
     parts = path.relative_to(root).parts
@@ -125,6 +146,7 @@ def delete_dataset(name: str) -> Path:
     for path in (root / f"{name}.h5", root / name):
         if path.is_file():
             path.unlink()
+            path.with_name(f".{path.name}.partial").unlink(missing_ok=True)
             logger.info("Deleted dataset %s", path)
             return path
         if path.is_dir():

@@ -168,6 +168,8 @@ class HDF5Writer:
         try:
             if self.path.exists():
                 self._resume()
+            else:  # a first recording killed before its file was valid left this: it holds nothing
+                self.path.with_name(f".{self.path.name}.partial").unlink(missing_ok=True)
         except BaseException:
             self.close()
             raise

@@ -5,7 +5,7 @@ Two layouts are understood, the first that matches wins:
     <cache>/checkpoints/<run>/              a checkpoint folder (see :mod:`stable_worldmodel.wm.utils`):
         weights.pt  config.json  [protocol.json]   state_dict + ``_target_`` tree, rebuilt without pickle
     <cache>/checkpoints/models--<user>--<repo>/    the same, named ``<user>/<repo>``
-    <cache>/<name>_object.ckpt              older runs: a whole pickled module (or a folder of them)
+    <cache>/<name>_object.ckpt              older runs: a whole pickled module (or a folder holding one)
 """
 
 from __future__ import annotations
@@ -32,9 +32,17 @@ def model_cache_dir(cache_dir: str | Path | None = None) -> Path:
     return get_cache_dir()
 
 
+PICKLE_ENV = "STABLEWM_REFUSE_PICKLE"  # set to 1 to refuse every pickled checkpoint
+
+
+def _pickles_in(folder: Path) -> list[Path]:
+    return sorted(p for p in folder.glob(f"*{SUFFIX}") if p.is_file())
+
+
 def _pickled_names(root: Path) -> set[str]:
-    names = {p.name[: -len(SUFFIX)] for p in root.glob(f"*{SUFFIX}")}
-    return names | {p.name for p in root.iterdir() if p.is_dir() and any(p.rglob(f"*{SUFFIX}"))}
+    """``<name>`` of every ``<name>_object.ckpt`` in ``root``, and folders holding exactly one (not searched deeper)."""
+    names = {p.name[: -len(SUFFIX)] for p in _pickles_in(root)}
+    return names | {p.name for p in root.iterdir() if p.is_dir() and len(_pickles_in(p)) == 1}
 
 
 def list_model_checkpoints(cache_dir: str | Path | None = None) -> list[str]:
@@ -63,15 +71,59 @@ def _new_layout_weights(model_name: str | Path, root: Path) -> Path | None:
 
 
 def _pickled_path(model_name: str | Path, root: Path) -> Path | None:
-    """The newest ``*_object.ckpt`` of ``model_name`` (a file, ``<name>_object.ckpt`` or a folder), or None."""
+    """The one pickled checkpoint ``model_name`` names, or None.
+
+    In order: a file (absolute, or relative to ``root``), ``<root>/<name>_object.ckpt``, or a
+    folder holding exactly one ``*_object.ckpt`` (several: an error asking which). Nothing is
+    searched below that, and no "newest file" is guessed.
+    """
     path = Path(model_name).expanduser()
     path = path if path.is_absolute() else root / path
     if path.is_file():
         return path
-    candidates = [Path(f"{path}{SUFFIX}")] if Path(f"{path}{SUFFIX}").is_file() else []
+    if Path(f"{path}{SUFFIX}").is_file():
+        return Path(f"{path}{SUFFIX}")
     if path.is_dir():
-        candidates += list(path.rglob(f"*{SUFFIX}"))
-    return max(candidates, key=lambda p: p.stat().st_mtime) if candidates else None
+        found = _pickles_in(path)
+        if len(found) > 1:
+            raise ConfigError(
+                f"AutoCostModel requires one checkpoint, got {len(found)} *{SUFFIX} files in {path}: "
+                f"{', '.join(p.name for p in found)}; pass the file you mean"
+            )
+        return found[0] if found else None
+    return None
+
+
+def _load_pickle(path: Path, caller: str, allow_pickle: bool | None) -> Any:
+    """Unpickle the module in ``path`` (it can run code: warned, or refused by the setting)."""
+    import os
+    import warnings
+
+    import torch
+
+    if allow_pickle is None:
+        allow_pickle = os.environ.get(PICKLE_ENV, "").strip().lower() not in ("1", "true", "yes")
+    if not allow_pickle:
+        raise ConfigError(
+            f"{caller} refuses pickled checkpoints ({PICKLE_ENV} is set or allow_pickle=False), got {path}; "
+            "save the model with stable_worldmodel.wm.utils.save_pretrained to load it without pickle"
+        )
+    warnings.warn(
+        f"{path} is a pickled checkpoint: loading it runs code stored in the file; load only files you trust "
+        f"(set {PICKLE_ENV}=1 to refuse pickles)",
+        UserWarning,
+        stacklevel=4,
+    )
+    map_location = None if torch.cuda.is_available() else "cpu"
+    try:
+        return torch.load(path, map_location=map_location, weights_only=False)
+    except (AttributeError, ModuleNotFoundError, ImportError) as exc:
+        what = getattr(exc, "name", None)
+        raise ConfigError(
+            f"{caller} requires the classes pickled in {path} to be importable, got {type(exc).__name__}: {exc}"
+            + (f" (module {what!r})" if what else "")
+            + "; install or import the package that defines them"
+        ) from exc
 
 
 def _unknown(caller: str, model_name: str | Path, root: Path) -> UnknownNameError:
@@ -106,7 +158,7 @@ def _find_module(obj: Any, method: str) -> Any:
     return None
 
 
-def _load_with(caller: str, model_name: str | Path, method: str, cache_dir: str | Path | None) -> Any:
+def _load_with(caller: str, model_name: str | Path, method: str, cache_dir: str | Path | None, allow_pickle: bool | None) -> Any:
     import torch
 
     root = model_cache_dir(cache_dir)
@@ -122,8 +174,7 @@ def _load_with(caller: str, model_name: str | Path, method: str, cache_dir: str 
         if path is None:
             raise _unknown(caller, model_name, root)
         logger.info("loading %s from %s", method, path)
-        map_location = None if torch.cuda.is_available() else "cpu"
-        obj = torch.load(path, map_location=map_location, weights_only=False)
+        obj = _load_pickle(path, caller, allow_pickle)
     module = _find_module(obj, method)
     if module is None:
         hint = " (a state_dict: put the config.json of its model beside it)" if isinstance(obj, dict) else ""
@@ -133,24 +184,21 @@ def _load_with(caller: str, model_name: str | Path, method: str, cache_dir: str 
     return module
 
 
-def AutoCostModel(model_name: str | Path, cache_dir: str | Path | None = None) -> Any:  # noqa: N802 (seed name)
+def AutoCostModel(model_name: str | Path, cache_dir: str | Path | None = None, *, allow_pickle: bool | None = None) -> Any:  # noqa: N802 (seed name)
     """Load model ``model_name`` from the cache and return its module with ``get_cost`` (in eval mode).
 
     ``model_name`` is tried first as a checkpoint of :mod:`stable_worldmodel.wm.utils` (a run
     folder under ``<cache>/checkpoints/``, a ``.pt`` file with a ``config.json`` beside it, or
     ``<user>/<repo>``): the model is rebuilt from ``config.json`` and its weights loaded on the
-    CPU (``weights_only=True``). Otherwise it is an older whole pickled module: the newest
-    ``<cache>/<model_name>_object.ckpt``, a checkpoint file, or a folder (absolute or under
-    the cache) searched for ``*_object.ckpt``. Unpickling those runs arbitrary code
-    (``weights_only=False``), so only load files you trust. The module returned is the
-    object itself or its first sub-module with ``get_cost``.
+    CPU (``weights_only=True``). Otherwise it is an older whole pickled module: a checkpoint
+    file, ``<cache>/<model_name>_object.ckpt``, or a folder holding exactly one
+    ``*_object.ckpt`` (see :func:`_pickled_path`). Unpickling runs code stored in the file:
+    it warns, naming the file, and ``allow_pickle=False`` (or ``STABLEWM_REFUSE_PICKLE=1``)
+    refuses it. The module returned is the object itself or its first sub-module with ``get_cost``.
     """
-    return _load_with("AutoCostModel", model_name, "get_cost", cache_dir)
+    return _load_with("AutoCostModel", model_name, "get_cost", cache_dir, allow_pickle)
 
 
-def AutoActionableModel(model_name: str | Path, cache_dir: str | Path | None = None) -> Any:  # noqa: N802
-    """Like :func:`AutoCostModel`, returning the module with ``get_action`` (for FeedForwardPolicy).
-
-    Only load trusted ``*_object.ckpt`` files: they are unpickled with ``weights_only=False``.
-    """
-    return _load_with("AutoActionableModel", model_name, "get_action", cache_dir)
+def AutoActionableModel(model_name: str | Path, cache_dir: str | Path | None = None, *, allow_pickle: bool | None = None) -> Any:  # noqa: N802
+    """Like :func:`AutoCostModel`, returning the module with ``get_action`` (for FeedForwardPolicy)."""
+    return _load_with("AutoActionableModel", model_name, "get_action", cache_dir, allow_pickle)

@@ -77,3 +77,10 @@ def test_missing_optional_dependency_names_the_pip_command(swm, error_line, tmp_
     result = swm("show", "dataset", "vid")
     assert result.exit_code == 1
     assert 'pip install "stable-worldmodel[video]"' in error_line(result)
+
+
+def test_list_dataset_names_unfinished_first_recordings(swm, _stablewm_home):
+    _stablewm_home.mkdir(parents=True, exist_ok=True)
+    (_stablewm_home / ".killed.h5.partial").write_bytes(b"x")
+    result = swm("list", "dataset")
+    assert result.exit_code == 0 and "Unfinished first recording" in result.output and ".killed.h5.partial" in result.output

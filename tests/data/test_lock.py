@@ -125,3 +125,20 @@ def test_folder_or_fifo_at_the_path(tmp_path):
     os.mkfifo(tmp_path / "pipe.h5")
     with pytest.raises(DatasetFormatError, match="pipe.h5.*a FIFO"):
         HDF5Writer(tmp_path / "pipe.h5")
+
+
+def test_leftover_partial_files_are_listed_and_cleaned(tmp_path, monkeypatch, synth):
+    from stable_worldmodel.data.info import leftover_partials
+
+    monkeypatch.setenv("STABLEWM_HOME", str(tmp_path))
+    partial = tmp_path / "sub" / ".killed.h5.partial"  # a first recording killed before its file was valid
+    partial.parent.mkdir()
+    partial.write_bytes(b"half an HDF5 file")
+    assert leftover_partials() == [partial]
+    lock = WriterLock(tmp_path / "sub" / "killed.h5").acquire()  # being created right now: not leftover
+    assert leftover_partials() == []
+    lock.release()
+    with HDF5Writer(tmp_path / "sub" / "killed.h5") as w:  # the next recording of that name removes it
+        assert not partial.exists()
+        w.write_episodes([synth(0, 2)])
+    assert leftover_partials() == []

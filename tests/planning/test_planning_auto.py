@@ -49,12 +49,51 @@ def test_finds_the_sub_module_in_the_default_cache(_stablewm_home):
     assert list_model_checkpoints() == ["pusht"]
 
 
-def test_folder_newest_checkpoint_wins_and_cache_dir_argument(tmp_path):
+def test_a_folder_resolves_to_its_one_checkpoint_only(tmp_path):
     save(Wrapper(tag=1), tmp_path / "run" / "epoch_1_object.ckpt", mtime=1_000)
-    save(Wrapper(tag=2), tmp_path / "run" / "sub" / "epoch_2_object.ckpt", mtime=2_000)
-    assert AutoCostModel("run", cache_dir=tmp_path).tag == 2
-    assert AutoCostModel(tmp_path / "run" / "epoch_1_object.ckpt").tag == 1  # a file path
+    save(Wrapper(tag=2), tmp_path / "run" / "sub" / "epoch_2_object.ckpt", mtime=2_000)  # not searched
+    assert AutoCostModel("run", cache_dir=tmp_path).tag == 1
+    assert AutoCostModel(tmp_path / "run" / "sub" / "epoch_2_object.ckpt").tag == 2  # a file path
     assert list_model_checkpoints(tmp_path) == ["run"]
+    save(Wrapper(tag=3), tmp_path / "run" / "epoch_3_object.ckpt", mtime=3_000)
+    with pytest.raises(ConfigError, match=r"got 2 \*_object.ckpt files in .*run: epoch_1_object.ckpt, epoch_3_object.ckpt; pass the file"):
+        AutoCostModel("run", cache_dir=tmp_path)  # no "newest wins" guess
+    assert list_model_checkpoints(tmp_path) == []  # what is listed is what loads
+
+
+def test_loading_a_pickle_warns_naming_the_file(_stablewm_home):
+    save(Head(), _stablewm_home / "tworoom_object.ckpt")
+    with pytest.warns(UserWarning, match=r"tworoom_object.ckpt is a pickled checkpoint: loading it runs code"):
+        AutoCostModel("tworoom")
+
+
+def test_pickles_can_be_refused(_stablewm_home, monkeypatch):
+    save(Head(), _stablewm_home / "tworoom_object.ckpt")
+    with pytest.raises(ConfigError, match="refuses pickled checkpoints"):
+        AutoCostModel("tworoom", allow_pickle=False)
+    monkeypatch.setenv("STABLEWM_REFUSE_PICKLE", "1")
+    with pytest.raises(ConfigError, match="STABLEWM_REFUSE_PICKLE is set"):
+        AutoActionableModel("tworoom")
+
+
+def test_pickle_of_a_class_that_cannot_be_found(_stablewm_home, monkeypatch):
+    import sys
+    import types
+
+    module = types.ModuleType("gone_module")
+
+    class Gone(torch.nn.Module):
+        def get_cost(self, info, candidates):
+            return 0
+
+    Gone.__module__, Gone.__qualname__ = "gone_module", "Gone"
+    module.Gone = Gone
+    monkeypatch.setitem(sys.modules, "gone_module", module)
+    _stablewm_home.mkdir(parents=True, exist_ok=True)
+    torch.save(Gone(), _stablewm_home / "gone_object.ckpt")
+    monkeypatch.delitem(sys.modules, "gone_module")
+    with pytest.raises(ConfigError, match=r"classes pickled in .*gone_object.ckpt to be importable.*gone_module"):
+        AutoCostModel("gone")
 
 
 def test_missing_checkpoint_lists_the_available_ones(_stablewm_home):
