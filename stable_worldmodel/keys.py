@@ -16,6 +16,7 @@ GOAL_PROPRIO = "goal_proprio"
 VARIATION = "variation"
 VARIATION_VALUES = "variation_values"
 EP_LEN = "ep_len"
+EP_IDX = "ep_idx"  # per-row index of the episode in its dataset (written by record_dataset)
 EP_OFFSET = "ep_offset"
 
 

@@ -31,7 +31,7 @@ def default_dataset_name(env_id: str, policy: str) -> str:
 
 def collect(
     env: EnvArg,
-    episodes: Annotated[int, typer.Option("--episodes", "-n", parser=int_in(1), metavar="N", help="Episodes to record.")] = 10,
+    episodes: Annotated[int, typer.Option("--episodes", "-n", parser=int_in(1), metavar="N", help="Episodes the dataset holds when done (an existing one is resumed up to N).")] = 10,
     policy: PolicyOpt = "random",
     name: Annotated[str | None, typer.Option("--name", metavar="NAME", help="Dataset name (default: <env>-<policy>).", show_default=False)] = None,
     num_envs: NumEnvsOpt = 1,
@@ -39,7 +39,7 @@ def collect(
     seed: SeedOpt = 0,
     variation: VariationOpt = None,
     max_steps: MaxStepsOpt = None,
-    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing dataset of that name instead of appending.")] = False,
+    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing dataset of that name instead of resuming it.")] = False,
     noise: Annotated[float | None, typer.Option("--noise", min=0.0, metavar="SIGMA", help="Std of the Gaussian noise on the expert's actions (default: 1.0 for experts that take noise, so the data shows what varied actions do; 0 records clean demonstrations).", show_default=False)] = None,
 ) -> None:
     """Record EPISODES episodes of ENV into an HDF5 dataset in the cache, then show it.
@@ -60,18 +60,21 @@ def collect(
     what = not_a_file(path)
     require(what is None, f"swm collect requires {str(path)!r} to be a dataset file, got {what}; pick another --name")
     out = console()
+    have = 0
     if path.exists():
         if overwrite:
             delete_dataset(name)
         else:
-            out.print(f"Dataset [bold]{name}[/] exists: appending {episodes} episodes (--overwrite replaces it).", soft_wrap=True)
+            have = dataset_info(name)["num_episodes"]
+            todo = f"recording {episodes - have} more to reach {episodes}" if have < episodes else "nothing to record"
+            out.print(f"Dataset [bold]{name}[/] holds {have} episodes: {todo} (--overwrite replaces it).", soft_wrap=True)
     with make_world(env, num_envs=num_envs, image_size=image_size, max_steps=max_steps, seed=seed) as world:
         options = reset_options(check_factors(world, variation or []))
         world.set_policy(make_policy(policy, env, seed=seed, noise=noise))
         path = world.record_dataset(name, episodes=episodes, seed=seed, options=options)
     display_dataset_info(dataset_info(name))
     how = f" (action noise {noise:g})" if noise else ""
-    out.print(f"Recorded {episodes} {policy} episodes{how} of {env} to {path}", soft_wrap=True)
+    out.print(f"Recorded {max(episodes - have, 0)} {policy} episodes{how} of {env} to {path}", soft_wrap=True)
 
 
 def eval_cmd(

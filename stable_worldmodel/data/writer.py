@@ -174,6 +174,11 @@ class HDF5Writer:
             self.close()
             raise
 
+    @property
+    def columns(self) -> list[str]:
+        """Names of the columns every episode must have (empty before the first episode of a new file)."""
+        return list(self._schema)
+
     # -- opening ------------------------------------------------------------------------------
     def _resume(self) -> None:
         if _superblock.repair(self.path):

@@ -24,10 +24,10 @@ logger = logging.getLogger(__name__)
 SEED_LIMIT = 2**31 - 1
 
 
-def _progress(world: Any, total: int, desc: str):
+def _progress(world: Any, total: int, desc: str, initial: int = 0):
     from tqdm.auto import tqdm
 
-    return tqdm(total=total, desc=desc, unit="ep", disable=int(getattr(world, "verbose", 1)) <= 0)
+    return tqdm(total=total, initial=initial, desc=desc, unit="ep", disable=int(getattr(world, "verbose", 1)) <= 0)
 
 
 NOT_RECORDED = frozenset({keys.RENDER_TIME})  # wall-clock timings: the same seed must give the same bytes
@@ -51,9 +51,15 @@ def _last_frames(infos: Mapping[str, Any]) -> dict[str, np.ndarray]:
     return out
 
 
-def _finish_episode(rows: dict[str, list[np.ndarray]]) -> dict[str, np.ndarray]:
-    """Stack an episode's rows; row t gets the action of step t+1 (NaN on the last row)."""
-    episode = {k: np.stack(v) for k, v in rows.items()}
+def _finish_episode(rows: dict[str, list[np.ndarray]], ep_idx: int | None = None) -> dict[str, np.ndarray]:
+    """Stack an episode's rows; row t gets the action of step t+1 (NaN on the last row).
+
+    Keys missing from some rows (an env whose reset info has keys its step info lacks, such as
+    ALE's ``seeds``) are skipped, so every episode has the same columns. ``ep_idx`` adds the
+    :data:`~stable_worldmodel.keys.EP_IDX` column.
+    """
+    length = max((len(v) for v in rows.values()), default=0)
+    episode = {k: np.stack(v) for k, v in rows.items() if len(v) == length}
     action = episode.get(keys.ACTION)
     if action is not None:
         action = action.astype(np.result_type(action.dtype, np.float32), copy=False)
@@ -61,6 +67,8 @@ def _finish_episode(rows: dict[str, list[np.ndarray]]) -> dict[str, np.ndarray]:
         shifted[:-1] = action[1:]
         shifted[-1] = np.nan
         episode[keys.ACTION] = shifted
+    if ep_idx is not None:
+        episode[keys.EP_IDX] = np.full(length, ep_idx, np.int64)
     return episode
 
 
@@ -72,15 +80,17 @@ def record_dataset(
     cache_dir: str | os.PathLike | None = None,
     options: dict | None = None,
 ) -> Path:
-    """Record exactly ``episodes`` complete episodes into ``<cache_dir>/<dataset_name>.h5``.
+    """Make ``<cache_dir>/<dataset_name>.h5`` hold ``episodes`` complete episodes in all.
 
     Each env runs its own episodes; an env that finishes is reset alone (``reset_envs``) with
     the next seed, and episodes still running when enough are written are discarded. Episode
-    ``k`` of a new file uses seed ``seed + k`` (a random base when ``seed`` is None). Writing to
-    an existing name appends; seeds then continue from the file's ``next_seed`` attribute so
-    they never repeat. Each finished batch of episodes is committed (see
-    :mod:`stable_worldmodel.data.writer`), so an interrupted recording keeps what it wrote.
-    Returns the file path.
+    ``k`` of a new file uses seed ``seed + k`` (a random base when ``seed`` is None). As in
+    release 0.0.3, an existing dataset is *resumed*: a file holding ``k`` episodes gets
+    ``episodes - k`` more (none when ``k >= episodes``), so re-running a crashed recording
+    completes it without duplicates; seeds continue from the file's ``next_seed`` so they never
+    repeat. Each finished batch of episodes is committed (see :mod:`stable_worldmodel.data.writer`),
+    so an interrupted recording keeps what it wrote. Every row gets ``ep_idx``, its episode's
+    index in the file. Returns the file path.
     """
     from ..data.utils import dataset_file
     from ..data.writer import HDF5Writer
@@ -93,6 +103,13 @@ def record_dataset(
     path = dataset_file(dataset_name, cache_dir)
     n = int(world.num_envs)
     with HDF5Writer(path) as writer:
+        have = writer.num_episodes
+        if have >= episodes:
+            logger.info("%s already holds %d episodes (>= %d asked): nothing to record", path, have, episodes)
+            return path
+        if have:
+            logger.info("Resuming %s: %d of %d episodes on disk", path, have, episodes)
+        with_idx = have == 0 or keys.EP_IDX in writer.columns  # files of older versions have no ep_idx
         if writer.next_seed is not None:
             next_seed = writer.next_seed
         elif seed is not None:
@@ -117,22 +134,23 @@ def record_dataset(
                     buffers[i].setdefault(key, []).append(value[i])
 
         push(range(n))
-        done = rows = 0
+        done, rows, todo = 0, 0, episodes - have
         t0 = time.perf_counter()
-        with _progress(world, episodes, f"Recording {path.name}") as bar:
-            while done < episodes:
+        with _progress(world, episodes, f"Recording {path.name}", initial=have) as bar:
+            while done < todo:
                 world.step()
                 push(range(n))
                 ended = np.flatnonzero(np.asarray(world.terminateds) | np.asarray(world.truncateds))
                 if not len(ended):
                     continue
-                batch = [_finish_episode(buffers[i]) for i in ended[: episodes - done]]
+                first = writer.num_episodes
+                batch = [_finish_episode(buffers[i], first + j if with_idx else None) for j, i in enumerate(ended[: todo - done])]
                 writer.write_episodes(batch, next_seed=next_seed)
                 done += len(batch)
                 rows += sum(len(next(iter(ep.values()))) for ep in batch)
                 bar.update(len(batch))
                 bar.set_postfix(rows_per_s=f"{rows / max(time.perf_counter() - t0, 1e-9):.0f}")
-                if done >= episodes:
+                if done >= todo:
                     break
                 ids = [int(i) for i in ended]
                 world.reset_envs(ids, seeds=take(len(ids)), options=[options] * len(ids))

@@ -28,11 +28,14 @@ def test_collect_records_and_summarizes(swm):
     assert ds.lengths.max() <= 21  # at most --max-steps steps (+ the reset frame)
 
 
-def test_collect_default_name_append_and_overwrite(swm):
+def test_collect_default_name_resume_and_overwrite(swm):
     assert swm("collect", TOY, "-n", "2", *SMALL).exit_code == 0
     assert list_datasets() == ["toy-v0-random"]
-    again = swm("collect", TOY, "-n", "1", *SMALL)
-    assert again.exit_code == 0 and "appending" in again.stdout
+    again = swm("collect", TOY, "-n", "3", *SMALL)
+    assert again.exit_code == 0 and "holds 2 episodes: recording 1 more to reach 3" in again.stdout
+    assert dataset_info("toy-v0-random")["num_episodes"] == 3
+    done = swm("collect", TOY, "-n", "3", *SMALL)
+    assert done.exit_code == 0 and "nothing to record" in done.stdout and "Recorded 0 random" in done.stdout
     assert dataset_info("toy-v0-random")["num_episodes"] == 3
     fresh = swm("collect", TOY, "-n", "1", "--overwrite", *SMALL)
     assert fresh.exit_code == 0

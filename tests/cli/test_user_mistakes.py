@@ -55,7 +55,7 @@ def test_collect_into_a_folder_named_like_the_dataset(swm, error_line, _stablewm
     (_stablewm_home / "x.h5").mkdir(parents=True)
     result = swm("collect", "swm/Toy-v0", "--episodes", "1", "--name", "x")
     assert result.exit_code == 1 and "x.h5' to be a dataset file, got a folder" in error_line(result)
-    assert "appending" not in result.output
+    assert "holds" not in result.output
 
 
 def test_collect_into_a_sub_folder_and_show_it(swm, _stablewm_home):

@@ -79,7 +79,9 @@ def test_round_trip(tmp_path, n, episodes, seed):
                 if k in (keys.EP_LEN, keys.EP_OFFSET):
                     continue
                 got = f[k][off : off + length]
-                if k == keys.ACTION:  # row t holds the action taken at step t
+                if k == keys.EP_IDX:  # the episode's index in the file, on every row
+                    assert got.tolist() == [ep] * length
+                elif k == keys.ACTION:  # row t holds the action taken at step t
                     want = np.stack([r[k] for r in rows[1:]])
                     np.testing.assert_array_equal(got[:-1], want)
                     assert np.isnan(got[-1]).all()
@@ -96,15 +98,34 @@ def test_round_trip(tmp_path, n, episodes, seed):
         assert item[keys.ACTION].shape == (num_steps, frameskip * 2)
 
 
-def test_append_continues_seeds(tmp_path):
+def test_recording_again_resumes_to_the_asked_total(tmp_path):
     world = make_world(2)
     world.record_dataset("toy", episodes=3, seed=5, cache_dir=tmp_path)
-    world.record_dataset("toy", episodes=2, seed=5, cache_dir=tmp_path)
+    world.record_dataset("toy", episodes=5, seed=5, cache_dir=tmp_path)  # 0.0.3: 5 in all, not 3 + 5
     with h5py.File(tmp_path / "toy.h5", "r") as f:
         assert len(f[keys.EP_LEN]) == 5
         starts = f[keys.STATE][:][f[keys.EP_OFFSET][:]]
         assert len({tuple(s) for s in starts}) == 5  # no episode seed was used twice
         assert f.attrs["next_seed"] >= 5 + 5
+        assert np.unique(f[keys.EP_IDX][:]).tolist() == [0, 1, 2, 3, 4]
+    before = (tmp_path / "toy.h5").read_bytes()
+    world.record_dataset("toy", episodes=4, seed=5, cache_dir=tmp_path)  # already more than asked: nothing
+    assert (tmp_path / "toy.h5").read_bytes() == before
+
+
+def test_keys_only_some_rows_have_are_skipped(tmp_path, monkeypatch):
+    """An env whose reset info has a key its step info lacks (ALE's ``seeds``) still records."""
+    world = make_world(2)
+    reset_envs = world.reset_envs
+
+    def with_extra(ids, *a, **k):
+        reset_envs(ids, *a, **k)
+        world.infos = {**world.infos, "seeds": np.zeros((world.num_envs, 1), np.int64)}
+
+    world.reset_envs = with_extra
+    path = world.record_dataset("toy", episodes=3, seed=0, cache_dir=tmp_path)
+    with h5py.File(path, "r") as f:
+        assert "seeds" not in f and len(f[keys.EP_LEN]) == 3
 
 
 def test_record_dataset_rejects_bad_episodes(tmp_path):
