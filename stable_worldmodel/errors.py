@@ -51,13 +51,18 @@ class ArgumentTypeError(SWMError, TypeError):
     """An argument of the wrong type where Python expects a TypeError (a dataset index that is not an int...)."""
 
 
+class WorkerError(SWMError, RuntimeError):
+    """An env worker process died, or its env raised (the World is then closed); or the
+    workers cannot be started or used from here (an unguarded script, a forked child)."""
+
+
 class DatasetBusyError(SWMError, BlockingIOError):
     """A dataset that another writer (named in the message) is writing."""
 
 
 def did_you_mean(name: str, candidates: Iterable[str], n: int = 3) -> str:
     """Return a ``" Did you mean 'x'?"`` suffix, or ``""`` when nothing is close."""
-    candidates = [str(c) for c in candidates]
+    candidates = list(dict.fromkeys(str(c) for c in candidates))  # each once, first occurrence first
     close = difflib.get_close_matches(str(name), candidates, n=n, cutoff=0.5)
     if not close:
         return ""
@@ -68,7 +73,7 @@ def did_you_mean(name: str, candidates: Iterable[str], n: int = 3) -> str:
 
 def unknown_name(kind: str, name: str, candidates: Iterable[str]) -> UnknownNameError:
     """Build an :class:`UnknownNameError` naming the bad value and the accepted ones."""
-    candidates = sorted(str(c) for c in candidates)
+    candidates = sorted(set(str(c) for c in candidates))
     hint = did_you_mean(name, candidates)
     shown = ", ".join(candidates[:20]) + (" ..." if len(candidates) > 20 else "")
     return UnknownNameError(f"Unknown {kind} {name!r}.{hint} Accepted: {shown or '(none)'}")

@@ -4,6 +4,11 @@ Both paths run the same :class:`EnvGroup` code, so for the same seeds they give 
 results. Worker processes each own a contiguous slice of the envs and return their infos
 already stacked, so the main process only concatenates a few arrays per step.
 Autoreset never happens: an env is reset only when :meth:`VecEnv.reset_envs` asks.
+
+Worker processes never outlive the VecEnv's process, a dead or failing worker raises
+:class:`WorkerError` (naming the worker, its envs and the env id) and leaves the VecEnv closed,
+and a script that would re-run in every worker is refused: see :mod:`._workers` for how, and
+:mod:`.shm` for how the shared memory is freed.
 """
 
 from __future__ import annotations
@@ -12,10 +17,9 @@ import atexit
 import logging
 import multiprocessing as mp
 import os
-import sys
-import traceback
 import weakref
 from collections.abc import Callable, Sequence
+from functools import partial
 from typing import Any
 
 import gymnasium as gym
@@ -23,7 +27,12 @@ import numpy as np
 from gymnasium.vector.utils import batch_space
 
 from ..errors import ConfigError
+from ..errors import WorkerError
+from ._workers import WorkerPool, check_main_guard, get_context, guard_hint
 from .batching import concat_batches, stack_dicts
+from .shm import ShmReader, unpack_result
+
+__all__ = ["VecEnv", "EnvGroup", "WorkerError", "MODES"]
 
 logger = logging.getLogger(__name__)
 
@@ -41,10 +50,12 @@ class EnvGroup:
 
     def __init__(self, factory: Callable[[], gym.Env], n: int):
         self.envs = [factory() for _ in range(n)]
+        self.current: int | None = None  # the env being called, named in worker error reports
 
     def reset(self, ids: Sequence[int], seeds: Sequence[int | None], options: Sequence[dict | None]):
         obs, infos = [], []
         for i, seed, opt in zip(ids, seeds, options):
+            self.current = i
             o, info = self.envs[i].reset(seed=None if seed is None else int(seed), options=opt)
             obs.append(o)
             infos.append(info)
@@ -52,7 +63,8 @@ class EnvGroup:
 
     def step(self, actions: Sequence[Any]):
         obs, rewards, terms, truncs, infos = [], [], [], [], []
-        for env, action in zip(self.envs, actions):
+        for i, (env, action) in enumerate(zip(self.envs, actions)):
+            self.current = i
             o, r, te, tr, info = env.step(action)
             obs.append(o)
             rewards.append(r)
@@ -70,6 +82,7 @@ class EnvGroup:
     def call(self, ids: Sequence[int], name: str, args_list: Sequence[tuple], kwargs_list: Sequence[dict]) -> list:
         out = []
         for i, args, kwargs in zip(ids, args_list, kwargs_list):
+            self.current = i
             attr = getattr(self.envs[i].unwrapped, name)
             out.append(attr(*args, **kwargs) if callable(attr) else attr)
         return out
@@ -80,6 +93,7 @@ class EnvGroup:
             "observation": env.observation_space,
             "action": env.action_space,
             "variation": [getattr(e.unwrapped, "variation_space", None) for e in self.envs],
+            "env_id": getattr(env.spec, "id", None),
         }
 
     def close(self) -> None:
@@ -93,61 +107,6 @@ def _stack_obs(obs: list) -> Any:
     return np.stack([np.asarray(o) for o in obs])
 
 
-def _pack(writer, cmd: str, result: Any) -> Any:
-    """Route the large arrays of a reset/step result through shared memory."""
-    if cmd == "reset":
-        return (writer.pack(0, result[0]), writer.pack(1, result[1]))
-    if cmd == "step":
-        return (writer.pack(2, result[0]), *result[1:4], writer.pack(3, result[4]))
-    return result
-
-
-def _unpack(reader, cmd: str, result: Any) -> Any:
-    if cmd == "reset":
-        return (reader.unpack(result[0]), reader.unpack(result[1]))
-    if cmd == "step":
-        return (reader.unpack(result[0]), *result[1:4], reader.unpack(result[4]))
-    return result
-
-
-def _worker(conn, factory_bytes: bytes, n: int) -> None:
-    import cloudpickle
-
-    from .shm import ShmWriter
-
-    writer = ShmWriter()
-    try:
-        group = EnvGroup(cloudpickle.loads(factory_bytes), n)
-        conn.send(("ok", cloudpickle.dumps(group.spaces())))
-    except BaseException:  # report construction errors to the parent, then quit
-        conn.send(("error", traceback.format_exc()))
-        conn.close()
-        return
-    while True:
-        try:
-            cmd, payload = conn.recv()
-        except (EOFError, KeyboardInterrupt):
-            break
-        if cmd == "close":
-            group.close()
-            writer.close()
-            conn.send(("ok", None))
-            break
-        try:
-            conn.send(("ok", _pack(writer, cmd, getattr(group, cmd)(*payload))))
-        except BaseException:
-            conn.send(("error", traceback.format_exc()))
-    writer.close()
-    conn.close()
-
-
-def _context() -> mp.context.BaseContext:
-    # fork is fast and safe while no threaded runtime (torch) is loaded in the parent
-    if sys.platform.startswith("linux") and "torch" not in sys.modules:
-        return mp.get_context("fork")
-    return mp.get_context("forkserver" if sys.platform != "win32" else "spawn")
-
-
 class VecEnv:
     """``num_envs`` copies of one env, stepped together.
 
@@ -159,15 +118,29 @@ class VecEnv:
 
     metadata: dict[str, Any] = {"autoreset_mode": "disabled"}
 
-    def __init__(self, factory: Callable[[], gym.Env], num_envs: int, mode: str = "auto", num_workers: int | None = None):
+    def __init__(
+        self,
+        factory: Callable[[], gym.Env],
+        num_envs: int,
+        mode: str = "auto",
+        num_workers: int | None = None,
+        start_method: str | None = None,
+    ):
         if mode not in MODES:
             raise ConfigError(f"VecEnv requires mode in {MODES}, got {mode!r}")
+        methods = mp.get_all_start_methods()
+        if start_method is not None and start_method not in methods:
+            raise ConfigError(f"VecEnv requires start_method in {methods} (or None: automatic), got {start_method!r}")
         cpus = os.cpu_count() or 1
         if mode == "auto":
             mode = "async" if num_envs >= AUTO_ASYNC_MIN_ENVS and cpus >= AUTO_ASYNC_MIN_CPUS else "sync"
         self.mode = mode
         self.num_envs = int(num_envs)
         self.closed = False
+        self._pool: WorkerPool | None = None
+        self._atexit: Callable[[], None] | None = None
+        self._closed_reason: str | None = None
+        self._env_id: str | None = None
         if mode == "sync":
             self._local = EnvGroup(factory, self.num_envs)
             self._slices = [(0, self.num_envs)]
@@ -175,7 +148,7 @@ class VecEnv:
             self._variation = spaces["variation"]
         else:
             self._local = None
-            self._start_workers(factory, min(num_workers or cpus, self.num_envs))
+            self._start_workers(factory, min(num_workers or cpus, self.num_envs), start_method)
             spaces = self._spaces
         self.single_observation_space = spaces["observation"]
         self.single_action_space = spaces["action"]
@@ -188,52 +161,84 @@ class VecEnv:
         self.render_mode = "rgb_array"
 
     # -- workers ------------------------------------------------------------------------
-    def _start_workers(self, factory, n_workers: int) -> None:
+    def _start_workers(self, factory, n_workers: int, start_method: str | None) -> None:
         import cloudpickle
 
-        from .shm import ShmReader
-
-        self._reader = ShmReader()
-        payload = cloudpickle.dumps(factory)
+        ctx = get_context(start_method)
+        check_main_guard(ctx.get_start_method())
         bounds = np.linspace(0, self.num_envs, n_workers + 1).round().astype(int)
         self._slices = [(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])]
-        ctx = _context()
-        self._conns, self._procs = [], []
-        for a, b in self._slices:
-            parent, child = ctx.Pipe()
-            proc = ctx.Process(target=_worker, args=(child, payload, b - a), daemon=True)
-            proc.start()
-            child.close()
-            self._conns.append(parent)
-            self._procs.append(proc)
-        # close gracefully at exit, before multiprocessing terminates its daemon workers (which
-        # would leave their shared memory to the resource tracker)
-        atexit.register(_close_at_exit, weakref.ref(self))
-        replies = [self._recv(c) for c in self._conns]
-        variation = []
-        for reply in replies:
-            spaces = cloudpickle.loads(reply)
-            variation.extend(spaces["variation"])
-        self._spaces = spaces
-        self._variation = variation
-
-    def _recv(self, conn) -> Any:
-        status, value = conn.recv()
-        if status != "ok":
+        self._reader = ShmReader()
+        payload = cloudpickle.dumps(factory)
+        self._pool = WorkerPool(ctx, [(EnvGroup, payload, b - a) for a, b in self._slices])
+        # close gracefully at exit, before multiprocessing terminates its daemon workers
+        self._atexit = partial(_close_at_exit, weakref.ref(self))
+        atexit.register(self._atexit)
+        try:
+            replies = [cloudpickle.loads(self._reply(k, "start")) for k in range(len(self._slices))]
+        except BaseException:
             self.close(terminate=True)
-            raise RuntimeError(f"an environment worker failed:\n{value}")
-        return value
+            raise
+        self._env_id = replies[0]["env_id"]
+        self._spaces = replies[0]
+        self._variation = [v for reply in replies for v in reply["variation"]]
+
+    @property
+    def _procs(self) -> list:
+        """The worker processes (empty in sync mode)."""
+        return list(self._pool.procs) if self._pool is not None else []
+
+    def _who(self, k: int) -> str:
+        a, b = self._slices[k]
+        envs = f"env {a}" if b - a == 1 else f"envs {a}-{b - 1}"
+        of = f" of {self._env_id!r}" if self._env_id else ""
+        return f"VecEnv worker {k} (pid {self._pool.procs[k].pid}, {envs}{of})"
+
+    def _reply(self, k: int, cmd: str) -> Any:
+        """Worker ``k``'s answer to ``cmd``; on a death or an error, close and raise WorkerError."""
+        status, value = self._pool.recv(k)
+        if status == "ok":
+            return value
+        if status == "died":
+            hint = " " + guard_hint(self._pool.method) if cmd == "start" and self._pool.method != "fork" else ""
+            raise self._fail(f"{self._who(k)} {value} during {cmd}.{hint}")
+        env, trace = value
+        if env is not None:
+            what = f"env {self._slices[k][0] + env} raised in {cmd}"
+        else:
+            what = "failed to make its envs" if cmd == "start" else f"failed during {cmd}"
+        raise self._fail(f"{self._who(k)}: {what}:\n{trace}")
+
+    def _fail(self, message: str) -> WorkerError:
+        self._closed_reason = message.splitlines()[0].rstrip(".")
+        self.close(terminate=True)
+        return WorkerError(message + "\nThe VecEnv is now closed.")
+
+    def _check_usable(self) -> None:
+        if self.closed:
+            raise WorkerError(f"VecEnv is closed ({self._closed_reason}); make a new World or VecEnv")
+        if os.getpid() != self._pool.owner:
+            raise WorkerError(
+                f"VecEnv workers belong to process {self._pool.owner}; a forked child cannot use them: "
+                "make its own World there"
+            )
 
     def _run(self, cmd: str, per_worker: list[tuple | None]) -> list:
         """Send ``cmd`` with its payload to the workers that have one; gather replies in order."""
         if self._local is not None:
             return [getattr(self._local, cmd)(*per_worker[0])] if per_worker[0] is not None else []
-        sent = []
-        for conn, payload in zip(self._conns, per_worker):
-            if payload is not None:
-                conn.send((cmd, payload))
-                sent.append(conn)
-        return [_unpack(self._reader, cmd, self._recv(conn)) for conn in sent]
+        self._check_usable()
+        sent = [k for k, payload in enumerate(per_worker) if payload is not None]
+        try:
+            for k in sent:
+                self._pool.send(k, (cmd, per_worker[k]))
+            return [unpack_result(self._reader, cmd, self._reply(k, cmd)) for k in sent]
+        except WorkerError:
+            raise
+        except BaseException:  # e.g. Ctrl-C: a reply may be half read, the pipes cannot be trusted
+            self._closed_reason = f"interrupted during {cmd}"
+            self.close(terminate=True)
+            raise
 
     def _split(self, env_ids: Sequence[int], *columns: Sequence) -> list[tuple | None]:
         """Group per-env arguments by worker: ``[(local_ids, col1, col2, ...) | None, ...]``."""
@@ -316,28 +321,20 @@ class VecEnv:
         return self
 
     def close(self, terminate: bool = False) -> None:
+        """Close the envs and stop the workers (``terminate``: without asking them); idempotent."""
         if self.closed:
             return
-        self.closed = True
         if self._local is not None:
+            self.closed = True
             self._local.close()
             return
-        for conn, proc in zip(self._conns, self._procs):
-            try:
-                if not terminate and proc.is_alive():
-                    conn.send(("close", ()))  # the worker unlinks its shared memory and exits
-                    if conn.poll(5.0):
-                        conn.recv()
-            except (BrokenPipeError, EOFError, OSError):
-                pass
-            conn.close()
-        for proc in self._procs:
-            if terminate:  # forked siblings hold copies of each other's pipes: no EOF to wait for
-                proc.terminate()
-            proc.join(timeout=2)
-            if proc.is_alive():
-                proc.kill()
-                proc.join()
+        if self._pool is None or os.getpid() != self._pool.owner:
+            return  # not started, or a forked copy: the workers belong to the process that started them
+        self.closed = True
+        self._closed_reason = self._closed_reason or "close() was called"
+        if self._atexit is not None:
+            atexit.unregister(self._atexit)
+        self._pool.close(graceful=not terminate)
         self._reader.close()
 
     def __del__(self):
