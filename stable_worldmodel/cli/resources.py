@@ -248,3 +248,25 @@ def delete(
     for name in names:
         remove(name)
         out.print(f"Deleted {kind} [bold]{name}[/]", soft_wrap=True)
+
+
+# -- upstream 0.1.1's command names ------------------------------------------------------------
+def datasets_cmd() -> None:
+    """List the datasets in the cache (upstream 0.1.1's name for `swm list dataset`)."""
+    list_cmd("dataset")
+
+
+def inspect_cmd(name: Annotated[str, typer.Argument(help="Dataset name to inspect (see `swm datasets`).", metavar="NAME", show_default=False)]) -> None:
+    """Show a dataset's columns, counts, shapes and factors (upstream 0.1.1's name for `swm show dataset`)."""
+    show("dataset", [name])
+
+
+def checkpoints_cmd(
+    filter: Annotated[str | None, typer.Argument(help="Only names containing this text.", metavar="FILTER", show_default=False)] = None,  # noqa: A002
+) -> None:
+    """List the model checkpoints in the cache, optionally filtered (upstream 0.1.1's `swm checkpoints`)."""
+    from ..data import get_cache_dir
+    from .display import names_table
+
+    names = [n for n in _list_models() if filter is None or filter in n]
+    names_table("Cached models", names, str(get_cache_dir()))

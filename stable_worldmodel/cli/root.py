@@ -117,7 +117,7 @@ def common(
 def _register() -> None:
     from .demo import demo
     from .pipeline import collect, envs, eval_cmd, fovs
-    from .resources import delete, list_cmd, show
+    from .resources import checkpoints_cmd, datasets_cmd, delete, inspect_cmd, list_cmd, show
     from .train import train_cmd
 
     app.command("list")(list_cmd)
@@ -129,6 +129,10 @@ def _register() -> None:
     app.command("envs")(envs)
     app.command("fovs")(fovs)
     app.command("demo")(demo)
+    # the names upstream 0.1.1 documents
+    app.command("datasets")(datasets_cmd)
+    app.command("inspect")(inspect_cmd)
+    app.command("checkpoints")(checkpoints_cmd)
 
 
 _register()

@@ -29,6 +29,8 @@ def resolve_env(env_id: str) -> str:
 
     if env_id in list_envs() or env_id in gym.registry:
         return env_id
+    if f"swm/{env_id}" in list_envs():  # upstream 0.1.1 accepts `swm fovs PushT-v1`
+        return f"swm/{env_id}"
     raise unknown_name("environment", env_id, list_envs())
 
 

@@ -7,9 +7,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from ._registry import EnvEntry, get_entry, list_envs, load_object, register_env
+from ._registry import WORLDS, EnvEntry, get_entry, list_envs, load_object, register, register_env
 
-__all__ = ["EnvEntry", "expert_policy", "get_entry", "list_envs", "register_env"]
+__all__ = ["WORLDS", "EnvEntry", "expert_policy", "get_entry", "list_envs", "register", "register_env"]
 
 
 def expert_policy(env_id: str, **kwargs: Any):

@@ -10,7 +10,7 @@ import importlib
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..errors import unknown_name
+from ..errors import UnknownNameError, did_you_mean
 
 
 @dataclass(frozen=True)
@@ -26,6 +26,7 @@ class EnvEntry:
 
 
 _ENTRIES: dict[str, EnvEntry] = {}
+WORLDS: set[str] = set()  # 0.0.3's name: every id registered through us (kept in step with _ENTRIES)
 
 _P = "stable_worldmodel.envs"
 BUILTIN: tuple[EnvEntry, ...] = (
@@ -71,6 +72,7 @@ def register_env(
 
     entry = EnvEntry(env_id, entry_point, tuple(tags), expert, dict(kwargs or {}), max_episode_steps)
     _ENTRIES[env_id] = entry
+    WORLDS.add(env_id)
     if env_id not in gym.registry:
         gym.register(id=env_id, entry_point=entry_point, kwargs=entry.kwargs, max_episode_steps=max_episode_steps)
 
@@ -102,7 +104,11 @@ def get_entry(env_id: str) -> EnvEntry:
         spec = gym.registry[env_id]
         ep = spec.entry_point if isinstance(spec.entry_point, str) else ""
         return EnvEntry(env_id, ep, (), None, dict(spec.kwargs), spec.max_episode_steps)
-    raise unknown_name("environment id", env_id, list(_ENTRIES) + list(gym.registry))
+    ours = sorted(_ENTRIES)
+    hint = did_you_mean(env_id, ours) or did_you_mean(env_id, [k for k in gym.registry if k not in _ENTRIES])
+    raise UnknownNameError(
+        f"Unknown environment id {env_id!r}.{hint} Our worlds: {', '.join(ours)} (any registered Gymnasium id works too)"
+    )
 
 
 def check_env_id(env_id: str) -> None:
@@ -114,3 +120,17 @@ def load_object(path: str) -> Any:
     """Import ``"package.module:Name"`` and return the attribute."""
     module, _, name = path.partition(":")
     return getattr(importlib.import_module(module), name)
+
+
+def register(id: str, entry_point: str | Any) -> None:  # noqa: A002 - 0.0.3's signature
+    """0.0.3's ``swm.envs.register(id, entry_point)``: :func:`register_env` with no tags or expert."""
+    if isinstance(entry_point, str):
+        register_env(id, entry_point)
+        return
+    import gymnasium as gym  # a class or factory: Gymnasium takes it as it is
+
+    _ENTRIES[id] = EnvEntry(id, f"{entry_point.__module__}:{entry_point.__qualname__}")
+    WORLDS.add(id)
+    if id not in gym.registry:
+        gym.register(id=id, entry_point=entry_point)
+

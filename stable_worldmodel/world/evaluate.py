@@ -106,6 +106,7 @@ def evaluate(world: World, episodes: int = 10, eval_keys=None, seed: int | None 
         "episode_successes": successes,
         "seeds": np.asarray(seeds, np.int64),
         "episode_lengths": lengths,
+        "episode_count": int(episodes),  # 0.0.3's key: finished episodes counted
     }
     for k in eval_keys:
         results[k] = np.stack(collected[k])

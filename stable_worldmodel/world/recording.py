@@ -257,14 +257,45 @@ def _check_eval_args(world, dataset, episodes_idx, start_steps, goal_offset_step
     return episodes_idx, start_steps
 
 
-def _apply_callables(world: Any, callables: Sequence[Mapping[str, Any]] | None) -> None:
-    """``[{"method": name, "args": {...}}, ...]``: call ``env.unwrapped.<name>(**args)`` on every env."""
+def _apply_callables(world: Any, callables: Sequence[Mapping[str, Any]] | None, starts: Sequence[Mapping[str, Any]]) -> None:
+    """Call ``env.unwrapped.<method>(**args)`` on every env after the reset, as release 0.0.3.
+
+    ``callables``: ``[{"method": name, "args": {arg: {"value": column}}}]``: each argument's
+    ``value`` names a column read from that env's start row (``"in_dataset": False`` passes
+    ``value`` itself). A method the env lacks, or a column the dataset lacks, is skipped with
+    one warning.
+    """
+    from .checks import env_class
+
+    cls = env_class(world.env_name)
+    n = int(world.num_envs)
     for spec in callables or []:
         if not isinstance(spec, Mapping) or not isinstance(spec.get("method"), str):
             raise ConfigError(
-                f"evaluate_from_dataset requires callables as {{'method': name, 'args': {{...}}}} dicts, got {spec!r}"
+                f"evaluate_from_dataset requires callables as {{'method': name, 'args': {{arg: {{'value': column}}}}}} "
+                f"dicts, got {spec!r}"
             )
-        world.envs.call(spec["method"], **dict(spec.get("args") or {}))
+        name = spec["method"]
+        if cls is not None and not hasattr(cls, name):
+            logger.warning("%s has no method %r: callable skipped", cls.__name__, name)
+            continue
+        args = spec.get("args", spec)
+        kwargs_list: list[dict[str, Any]] = [{} for _ in range(n)]
+        for arg, data in (args or {}).items():
+            if arg == "method" and args is spec:
+                continue
+            data = data if isinstance(data, Mapping) else {"value": data, "in_dataset": False}
+            value = data.get("value")
+            if data.get("in_dataset", True):
+                if value not in starts[0]:
+                    logger.warning("column %r is not in the dataset: argument %r of %s skipped", value, arg, name)
+                    continue
+                for i in range(n):
+                    kwargs_list[i][arg] = np.array(starts[i][value])
+            else:
+                for i in range(n):
+                    kwargs_list[i][arg] = value
+        world.envs.call_each(name, [()] * n, kwargs_list)
 
 
 def evaluate_from_dataset(
@@ -283,7 +314,7 @@ def evaluate_from_dataset(
     The goal is the recorded state ``goal_offset_steps`` later; the env builds its reset
     options from both rows (``SupportsDatasetReset.reset_options_from_dataset``). The
     policy then gets ``eval_budget`` steps; an env succeeds when it terminates. ``callables``
-    (``[{"method": name, "args": {...}}]``) are called on every env before the reset.
+    are called on every env after the reset (see :func:`_apply_callables`).
     ``dataset`` is a :class:`~stable_worldmodel.data.Dataset` or an HDF5 dataset name.
 
     Returns ``success_rate`` (percent), ``episode_successes`` ``(B,)`` bool,
@@ -301,10 +332,10 @@ def evaluate_from_dataset(
     rows = [int(dataset.offsets[e]) + s for e, s in zip(episodes_idx, start_steps)]
     starts = [dataset.get_row_data(r) for r in rows]
     goals = [dataset.get_row_data(r + int(goal_offset_steps)) for r in rows]
-    _apply_callables(world, callables)
     options = world.envs.call_each("reset_options_from_dataset", [(s, g) for s, g in zip(starts, goals)])
     n = int(world.num_envs)
     world.reset_envs(list(range(n)), options=list(options))
+    _apply_callables(world, callables, starts)
     views = [keys.PIXELS] if save_video and keys.PIXELS in world.infos else []
     frames: list[list[np.ndarray]] = [[_frame(world.infos, views, i)] if views else [] for i in range(n)]
     steps_to_success = np.full(n, -1, np.int64)

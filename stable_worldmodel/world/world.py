@@ -253,7 +253,7 @@ class World:
     def evaluate(self, episodes: int = 10, eval_keys: list[str] | None = None, seed: int | None = None, options: dict | None = None, dump_every: int = -1) -> dict:
         """Run the policy for ``episodes`` episodes; success = ``terminated``, truncation = failure.
 
-        Returns ``success_rate`` (percent), ``episode_successes`` (bool, one per episode in seed
+        Returns ``success_rate`` (percent), ``episode_count``, ``episode_successes`` (bool, one per episode in seed
         order), ``seeds`` (unique; ``seed + k`` for episode k when ``seed`` is given), and for
         each of ``eval_keys`` the value of ``infos[key]`` (last history frame) at the end of each
         episode. ``dump_every > 0`` writes the results so far as JSON to

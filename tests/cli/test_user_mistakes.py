@@ -84,3 +84,11 @@ def test_list_dataset_names_unfinished_first_recordings(swm, _stablewm_home):
     (_stablewm_home / ".killed.h5.partial").write_bytes(b"x")
     result = swm("list", "dataset")
     assert result.exit_code == 0 and "Unfinished first recording" in result.output and ".killed.h5.partial" in result.output
+
+
+def test_upstream_command_names(swm, _stablewm_home):
+    assert swm("collect", "swm/Toy-v0", "-n", "1", "--name", "d", "--max-steps", "3").exit_code == 0
+    assert "d" in swm("datasets").output
+    assert "dataset d" in swm("inspect", "d").output
+    assert swm("checkpoints", "nothing-matches").exit_code == 0
+    assert "factors of variation" in swm("fovs", "Toy-v0").output  # without the swm/ prefix

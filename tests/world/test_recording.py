@@ -262,3 +262,24 @@ def test_same_seed_gives_byte_identical_datasets(tmp_path):
     with h5py.File(paths[0]) as f:
         assert keys.RENDER_TIME not in f  # a wall-clock timing: never recorded
     assert paths[0].read_bytes() == paths[1].read_bytes()
+
+
+def test_evaluate_from_dataset_callables_read_their_arguments_from_the_start_row(tmp_path, caplog):
+    world = World("swm/PushT-v1", num_envs=2, image_shape=(16, 16), max_episode_steps=6, verbose=0)
+    world.set_policy(RandomPolicy(seed=0))
+    world.record_dataset("pt", episodes=2, seed=1, cache_dir=tmp_path)
+    ds = HDF5Dataset("pt", cache_dir=tmp_path)
+    callables = [
+        {"method": "_set_goal_state", "args": {"goal_state": {"value": keys.STATE}}},  # after the reset
+        {"method": "no_such_method", "args": {}},
+    ]
+    with caplog.at_level("WARNING"):
+        world.evaluate_from_dataset(ds, [0, 1], [1, 2], goal_offset_steps=3, eval_budget=1, callables=callables, save_video=False)
+    goals = world.envs.call("_goal_state")
+    for i, (ep, step) in enumerate([(0, 1), (1, 2)]):
+        np.testing.assert_allclose(goals[i], ds.get_row_data(int(ds.offsets[ep]) + step)[keys.STATE])
+    assert "no method 'no_such_method'" in caplog.text
+    literal = [0.0, 0.0, 100.0, 100.0, 0.5, 0.0, 0.0]
+    callables = [{"method": "_set_goal_state", "args": {"goal_state": {"value": literal, "in_dataset": False}}}]
+    world.evaluate_from_dataset(ds, [0, 1], [1, 2], goal_offset_steps=3, eval_budget=1, callables=callables, save_video=False)
+    np.testing.assert_allclose(world.envs.call("_goal_state")[1], literal)

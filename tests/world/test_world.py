@@ -179,6 +179,7 @@ def test_evaluate_counts_and_seeds():
     res = world.evaluate(episodes=7, seed=100, eval_keys=[keys.STATE])
     assert res["episode_successes"].shape == (7,)
     assert res["seeds"].tolist() == list(range(100, 107))
+    assert res["episode_count"] == 7
     assert res[keys.STATE].shape == (7, 2)
     assert 0.0 <= res["success_rate"] <= 100.0
     assert res["success_rate"] == pytest.approx(res["episode_successes"].mean() * 100)

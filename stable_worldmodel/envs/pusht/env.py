@@ -188,6 +188,21 @@ class PushT(DatasetResetMixin, PushTPhysics, gym.Env):
         success, _ = self.eval_state(self._goal_state, self._state)
         return self._obs(), self._reward(self._state), success, False, self._info()
 
+    def _set_state(self, state: Any) -> None:
+        """Put the agent and block at ``state`` (7 numbers, or 5 with zero agent velocity), as 0.0.3's PushT.
+
+        Used by ``evaluate_from_dataset(callables=[{"method": "_set_state", ...}])``.
+        """
+        s = _state_option(state, keys.STATE)
+        self.agent.position, self.agent.velocity = (s[0], s[1]), (s[5], s[6])
+        set_pose(self.block, s[2:4], s[4])
+        self._state = body_state(self.agent, self.block)
+
+    def _set_goal_state(self, goal_state: Any) -> None:
+        """Use ``goal_state`` (7 numbers) as the goal from now on (success, reward and goal image)."""
+        self._goal_state = _state_option(goal_state, keys.GOAL_STATE)
+        self._goal_img = None
+
     def render(self) -> np.ndarray:
         """The current scene as an ``(H, W, 3)`` uint8 frame at :attr:`render_size`."""
         s = self._state

@@ -55,3 +55,51 @@ class TwoRoomExpert(ExpertPolicy):
         if abs(pos[1] - centre_y) < half_h - _R - _MARGIN:  # aligned with the gap: cross
             return np.array([wall_x + goal_side * clear, centre_y])
         return np.array([wall_x - side * clear, centre_y])  # line up in front of the door
+
+
+class ExpertPolicy(TwoRoomExpert):
+    """:class:`TwoRoomExpert` under the name and arguments of 0.0.3 / 0.1.1's ``envs.two_room.ExpertPolicy``.
+
+    ``action_noise`` is the std of the Gaussian action noise; with probability
+    ``action_repeat_prob`` an env repeats its previous action (a sticky-action collector).
+    ``door_fit_margin`` and ``door_reach_tol`` tune upstream's door approach and are kept as
+    attributes only: this controller lines up with the door from the state's door geometry.
+    """
+
+    def __init__(
+        self,
+        action_noise: float = 0.0,
+        action_repeat_prob: float = 0.0,
+        door_fit_margin: float = 1.10,
+        door_reach_tol: float | None = None,
+        seed: int | None = None,
+        **kwargs: Any,
+    ):
+        from ...errors import ConfigError
+
+        if not 0.0 <= float(action_repeat_prob) <= 1.0:
+            raise ConfigError(f"ExpertPolicy requires action_repeat_prob in [0, 1], got {action_repeat_prob!r}")
+        kwargs.setdefault("env_id", "swm/TwoRoom-v1")
+        super().__init__(noise=float(action_noise), seed=seed, **kwargs)
+        self.action_noise = float(action_noise)
+        self.action_repeat_prob = float(action_repeat_prob)
+        self.door_fit_margin = float(door_fit_margin)
+        self.door_reach_tol = door_reach_tol
+        self._last: np.ndarray | None = None
+
+    def set_seed(self, seed: int | None) -> None:
+        super().set_seed(seed)
+        self.rng = np.random.default_rng(seed)
+        self._last = None
+
+    def get_action(self, infos: dict[str, np.ndarray], **kwargs: Any) -> np.ndarray:
+        action = super().get_action(infos, **kwargs)
+        if self.action_repeat_prob > 0 and self._last is not None and self._last.shape == action.shape:
+            repeat = self.rng.random(len(action)) < self.action_repeat_prob
+            action[repeat] = self._last[repeat]
+        self._last = action.copy()
+        return action
+
+
+__all__ = ["ExpertPolicy", "TwoRoomExpert"]
+
