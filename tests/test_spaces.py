@@ -65,7 +65,7 @@ def test_seed_dict_example():
 
     assert config.contains(state)
     assert list(state) == ["difficulty", "world", "player_pos"]
-    assert list(config.sampling_order) == ["difficulty", "world.width", "world.height", "player_pos"]
+    assert config.sampling_order == ["difficulty", "world", "world.width", "world.height", "player_pos"]
     config.reset()
     assert config.check()  # the int init_value of the float Box was cast, not rejected
     assert config.value["player_pos"].dtype == np.float32
@@ -163,10 +163,10 @@ def test_leaves_extend_gymnasium_classes():
 def test_leaf_sample_sets_value_and_keeps_type(make):
     space = make()
     space.seed(3)
-    init = space.init_value
+    assert space.value is None  # no init_value: nothing until the first draw
     x = space.sample()
-    assert space.contains(x)
-    assert type(x) is type(init) and np.shape(x) == np.shape(init)
+    assert space.contains(x) and space.check()
+    assert type(x) is (np.int64 if isinstance(space, Discrete) else np.ndarray) and np.shape(x) == space.shape
     assert np.asarray(x).dtype == space.dtype
     np.testing.assert_array_equal(space.value, x)
 
@@ -183,6 +183,7 @@ def test_leaf_seed_makes_sampling_deterministic(make):
 @pytest.mark.parametrize("make", LEAVES)
 def test_leaf_sample_without_set_value_keeps_value(make):
     space = make()
+    space.sample()
     before = space.value
     space.seed(0)
     draws = [space.sample(set_value=False) for _ in range(20)]
@@ -190,13 +191,25 @@ def test_leaf_sample_without_set_value_keeps_value(make):
     assert any(not np.array_equal(d, before) for d in draws)
 
 
-def test_defaults_when_init_value_is_none():
-    np.testing.assert_array_equal(Box(0.0, 1.0, shape=(2,)).value, [0.5, 0.5])
-    assert Box(0, 9, shape=(), dtype=np.int64).value == 4  # floored midpoint
-    np.testing.assert_array_equal(Box(np.array([1.0, -np.inf, -np.inf]), np.array([np.inf, 2.0, np.inf])).value, [1, 2, 0])
-    np.testing.assert_array_equal(RGBBox().value, [127, 127, 127])
-    assert Discrete(5, start=3).value == 3
-    np.testing.assert_array_equal(MultiDiscrete([3, 4], start=[1, 2]).value, [1, 2])
+@pytest.mark.parametrize("make", LEAVES)
+def test_no_init_value_means_none_until_set(make, caplog):
+    space = make(constrain_fn=lambda x: True)
+    assert space.init_value is None and space.value is None
+    assert not space.contains(None)
+    with caplog.at_level(logging.WARNING, logger="stable_worldmodel.spaces"):
+        assert not space.check()
+    assert "None" in caplog.text
+    space.sample(set_value=False)
+    assert space.value is None  # a draw that is not kept leaves it unset
+    x = space.sample()
+    assert space.check() and space.init_value is None
+    np.testing.assert_array_equal(space.value, x)
+    space.reset()
+    assert space.value is None and not space.check()
+    space.set_value(x)
+    assert space.check()
+    space.reset()
+    assert space.value is None
 
 
 def test_init_value_of_other_dtype_is_cast():
@@ -214,20 +227,42 @@ def test_init_value_of_other_dtype_is_cast():
     "make, bad, match",
     [
         (lambda v: Box(0.0, 1.0, shape=(2,), init_value=v), np.zeros(3), "shape"),
-        (lambda v: Box(0.0, 1.0, shape=(2,), init_value=v), np.array([0.5, 2.0]), "bounds"),
         (lambda v: Box(0.0, 1.0, shape=(), init_value=v), "abc", "numeric"),
         (lambda v: Discrete(4, init_value=v), 2.5, "integer"),
-        (lambda v: Discrete(4, init_value=v), 4, "bounds"),
-        (lambda v: MultiDiscrete([2, 2], init_value=v), [1, 2], "bounds"),
         (lambda v: RGBBox(init_value=v), [256, 0, 0], "integer"),
         (lambda v: RGBBox(init_value=v), [1.5, 0, 0], "integer"),
     ],
 )
 def test_bad_init_value_raises_space_error(make, bad, match):
+    """A value that cannot be an element of the space (shape, type, lossy cast) is refused."""
     with pytest.raises(SpaceError, match=match) as info:
         make(bad)
     assert isinstance(info.value, ValueError)
     assert "requires" in str(info.value)
+
+
+@pytest.mark.parametrize(
+    "make, bad",
+    [
+        (lambda v: Box(0.0, 1.0, shape=(2,), init_value=v), np.array([0.5, 2.0])),
+        (lambda v: Discrete(4, init_value=v), 4),
+        (lambda v: MultiDiscrete([2, 2], init_value=v), [1, 2]),
+    ],
+    ids=["box", "discrete", "multidiscrete"],
+)
+def test_out_of_bounds_init_value_is_kept_and_reported_by_check(make, bad, caplog):
+    space = make(bad)  # accepted, as release 0.0.3 documents
+    np.testing.assert_array_equal(space.init_value, bad)
+    np.testing.assert_array_equal(space.value, bad)
+    assert not space.contains(space.value)
+    with caplog.at_level(logging.WARNING, logger="stable_worldmodel.spaces"):
+        assert space.check() is False  # reported, not raised
+    assert "outside the space bounds" in caplog.text
+    space.sample()
+    space.reset()
+    np.testing.assert_array_equal(space.value, bad)  # reset brings the out-of-bounds value back
+    with pytest.raises(SpaceError, match="inside its bounds"):
+        space.set_init_value(np.full(space.shape, 9, dtype=space.dtype))  # the setters still validate
 
 
 def test_set_value_and_set_init_value():
@@ -270,18 +305,19 @@ def test_contains_applies_constraint_and_bounds():
 
 def test_check_logs_when_constraint_breaks(caplog):
     flag = {"ok": True}
-    box = Box(0.0, 1.0, shape=(), constrain_fn=lambda _: flag["ok"])
+    box = Box(0.0, 1.0, shape=(), init_value=0.5, constrain_fn=lambda _: flag["ok"])
     assert box.check()
     flag["ok"] = False
     with caplog.at_level(logging.WARNING, logger="stable_worldmodel.spaces"):
         assert not box.check()
-    assert "constrain_fn" in caplog.text
+    assert "does not satisfy constrain_fn" in caplog.text
 
 
 def test_impossible_constraint_raises_runtime_error_and_keeps_value():
     space = Discrete(5, init_value=1, constrain_fn=lambda x: x > 10)
-    with pytest.raises(RuntimeError, match="5 rejections"):
+    with pytest.raises(RuntimeError, match="5 rejections") as info:
         space.sample(max_tries=5)
+    assert "constrain_fn not satisfied after 5 draws" in str(info.value)
     assert space.value == 1
     with pytest.raises(SpaceError, match="max_tries"):
         space.sample(max_tries=0)
@@ -357,7 +393,7 @@ def test_non_callable_constraint_is_rejected():
 
 
 def test_leaf_deepcopy_is_independent():
-    space = Box(0.0, 1.0, shape=(2,))
+    space = Box(0.0, 1.0, shape=(2,), init_value=[0.5, 0.5])
     clone = copy.deepcopy(space)
     clone.set_value([0.1, 0.1])
     np.testing.assert_array_equal(space.value, [0.5, 0.5])

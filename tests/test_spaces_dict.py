@@ -29,7 +29,7 @@ def make_nested() -> Dict:
 def make_pusht_like() -> Dict:
     """About 16 leaves, like the PushT variation space."""
     part = lambda: Dict({"color": RGBBox(), "scale": Box(0.5, 1.5, shape=()), "angle": Box(-np.pi, np.pi, shape=())})
-    return Dict(
+    space = Dict(
         {
             "agent": part(),
             "block": Dict({"color": RGBBox(), "scale": Box(0.5, 1.5, shape=()), "shape": Discrete(3)}),
@@ -41,6 +41,10 @@ def make_pusht_like() -> Dict:
             "physics": Dict({"friction": Box(0.0, 1.0, shape=()), "damping": MultiDiscrete([3, 3]), "mass": Box(0.1, 2.0)}),
         }
     )
+    space.seed(12345)
+    space.set_init_value(space.sample())  # leaves built without init_value start unset
+    space.reset()
+    return space
 
 
 def assert_tree_equal(a, b):
@@ -83,17 +87,18 @@ def test_sampling_follows_order_and_nested_order():
     )
     space.sample()
     assert calls == ["b", "y", "x", "a"]
-    assert list(space.sampling_order) == ["b", "inner.y", "inner.x", "a"]
+    assert space.sampling_order == ["b", "inner", "inner.y", "inner.x", "a"]
     calls.clear()
     space.update(["a", "inner.x"])
-    assert calls == ["x", "a"]
+    assert calls[:2] == ["x", "a"]  # the draws; update's final check() then calls every constraint again
 
 
-def test_sampling_order_view_is_ordered_and_set_like():
-    order = make_nested().sampling_order
-    assert "agent.color" in order and "agent" not in order
-    assert list(order) == ["z", "agent.size", "agent.color", "a"]
-    assert order == {"z", "agent.color", "agent.size", "a"} and len(order) == 4
+def test_sampling_order_is_a_fresh_list_of_node_paths():
+    space = make_nested()
+    order = space.sampling_order
+    assert order == ["z", "agent", "agent.size", "agent.color", "a"]
+    order.clear()  # a copy: the space keeps its order
+    assert space.sampling_order == ["z", "agent", "agent.size", "agent.color", "a"]
 
 
 def test_sampling_order_missing_keys_appended_with_one_warning(caplog):
@@ -146,11 +151,13 @@ def test_update_parent_and_child_resamples_whole_subtree():
     calls = []
     space = Dict({"p": Dict({"x": Discrete(9, constrain_fn=lambda v: calls.append("x") or True),
                              "y": Discrete(9, constrain_fn=lambda v: calls.append("y") or True)})})
+    space.sample()
+    calls.clear()
     space.update(["p.x", "p"])
-    assert sorted(calls) == ["x", "y"]
+    assert calls == ["x", "y", "x", "y"]  # both drawn, then both checked by update's final check()
     calls.clear()
     space.update(["p", "p.x"])
-    assert sorted(calls) == ["x", "y"]
+    assert calls == ["x", "y", "x", "y"]
 
 
 def test_update_unknown_key_raises_with_suggestion():
@@ -165,7 +172,7 @@ def test_update_unknown_key_raises_with_suggestion():
 
 def test_nested_constraint_is_enforced_by_update():
     inner = Dict({"lo": Discrete(10), "hi": Discrete(10, init_value=5)}, constrain_fn=lambda v: v["lo"] < v["hi"])
-    space = Dict({"inner": inner, "other": Discrete(3)})
+    space = Dict({"inner": inner, "other": Discrete(3, init_value=0)})
     space.seed(0)
     for _ in range(30):
         space.update(["inner.lo"])
@@ -255,7 +262,7 @@ def test_set_value_errors_are_atomic(bad, error, match):
 
 def test_init_value_argument_overrides_leaf_defaults():
     space = Dict({"a": Discrete(5), "n": Dict({"b": Box(0.0, 1.0, shape=())})}, init_value={"n.b": 0.9})
-    assert space.value["a"] == 0 and float(space.value["n"]["b"]) == pytest.approx(0.9)
+    assert space.value["a"] is None and float(space.value["n"]["b"]) == pytest.approx(0.9)
     space.sample()
     space.reset()
     assert float(space.value["n"]["b"]) == pytest.approx(0.9)
@@ -274,14 +281,14 @@ def test_contains_and_check():
 
 def test_check_debug_logs_failures(caplog):
     flag = {"ok": True}
-    space = Dict({"n": Dict({"b": Discrete(3)}, constrain_fn=lambda v: flag["ok"])})
+    space = Dict({"n": Dict({"b": Discrete(3, init_value=0)}, constrain_fn=lambda v: flag["ok"])})
     assert space.check()
     flag["ok"] = False
     with caplog.at_level(logging.WARNING, logger="stable_worldmodel.spaces"):
         assert not space.check()
         assert not caplog.records
         assert not space.check(debug=True)
-    assert "n." in caplog.text and "constrain_fn" in caplog.text
+    assert "'n (constrain_fn)'" in caplog.text and "failed check()" in caplog.text
 
 
 def test_empty_dict():

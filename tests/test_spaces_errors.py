@@ -45,7 +45,7 @@ def test_bad_constructor_arguments_raise_space_error(make, fragments):
 
 
 def _leaf(fn):
-    return Box(0.0, 1.0, shape=(2,), constrain_fn=fn)
+    return Box(0.0, 1.0, shape=(2,), init_value=[0.5, 0.5], constrain_fn=fn)
 
 
 @pytest.mark.parametrize("call", ["sample", "check", "contains"])
@@ -54,10 +54,16 @@ def _leaf(fn):
     [
         (lambda: _leaf(lambda x: x > 0.2), ["Box(0.0, 1.0, (2,), float32)", "a bool", "ndarray", "shape (2,)"]),
         (lambda: _leaf(lambda x: np.array([True])), ["return a bool", "[ True]", "shape (1,)"]),
-        (lambda: Discrete(4, constrain_fn=lambda x: 1), ["Discrete(4)", "return a bool", "got 1 (int)"]),
-        (lambda: Discrete(4, constrain_fn=lambda x: None), ["Discrete(4)", "got None (NoneType)"]),
-        (lambda: Dict({"a": Discrete(3)}, constrain_fn=lambda v: "yes"), ["Dict with keys ['a']", "got 'yes' (str)"]),
-        (lambda: Dict({"a": Discrete(3)}, constrain_fn=lambda v: np.ones(2, bool)), ["Dict with keys", "ndarray"]),
+        (lambda: Discrete(4, init_value=0, constrain_fn=lambda x: 1), ["Discrete(4)", "return a bool", "got 1 (int)"]),
+        (lambda: Discrete(4, init_value=0, constrain_fn=lambda x: None), ["Discrete(4)", "got None (NoneType)"]),
+        (
+            lambda: Dict({"a": Discrete(3, init_value=0)}, constrain_fn=lambda v: "yes"),
+            ["Dict with keys ['a']", "got 'yes' (str)"],
+        ),
+        (
+            lambda: Dict({"a": Discrete(3, init_value=0)}, constrain_fn=lambda v: np.ones(2, bool)),
+            ["Dict with keys", "ndarray"],
+        ),
     ],
     ids=["box-array", "box-one-element-array", "discrete-int", "discrete-none", "dict-str", "dict-array"],
 )
@@ -86,14 +92,14 @@ def test_bool_and_numpy_bool_results_are_accepted(fn):
 
 
 def test_valid_and_documented_cases_still_work(caplog):
-    assert Box(0.0, 0.0, shape=()).value == 0.0  # low == high is a point, not an error
-    np.testing.assert_array_equal(Box(-np.inf, np.inf, shape=(2,)).value, [0.0, 0.0])
-    assert Discrete(np.int32(1)).value == 0
+    assert Box(0.0, 0.0, shape=()).sample() == 0.0  # low == high is a point, not an error
+    assert Box(-np.inf, np.inf, shape=(2,)).sample().shape == (2,)
+    assert Discrete(np.int32(1)).sample() == 0
     np.testing.assert_array_equal(MultiDiscrete(np.array([2.0, 3.0])).nvec, [2, 3])
-    box = Box(0.0, 1.0, shape=(), constrain_fn=lambda x: x < 0.5)  # no init_value: the midpoint
+    box = Box(0.0, 1.0, shape=(), init_value=0.75, constrain_fn=lambda x: x < 0.5)
     with caplog.at_level(logging.WARNING, logger="stable_worldmodel.spaces"):
-        assert not box.check()  # the default breaks the constraint: a warning, not an error
-    assert "constrain_fn" in caplog.text
+        assert not box.check()  # the init_value breaks the constraint: a warning, not an error
+    assert "does not satisfy constrain_fn" in caplog.text
 
 
 def test_error_class_keeps_value_error_for_callers():

@@ -2,8 +2,7 @@
 
 from __future__ import annotations
 
-import logging
-from collections.abc import Callable, Iterable, Iterator, KeysView, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from typing import Any
 
 import gymnasium as gym
@@ -11,8 +10,8 @@ import numpy as np
 
 from ..errors import SpaceError, did_you_mean, unknown_name
 from ._leaf import StatefulSpaceMixin, constraint_verdict, rejection_sample, short_repr
-
-logger = logging.getLogger(__name__)
+from ._order import apply_sampling_order
+from ._report import SpaceCheckError, warn
 
 __all__ = ["Dict"]
 
@@ -35,17 +34,20 @@ class Dict(gym.spaces.Dict):
     """A ``gymnasium.spaces.Dict`` of stateful spaces (leaves or nested ``Dict``).
 
     - Keys keep insertion order (no sorting) and must be strings without ``"."``.
-    - ``sampling_order`` lists top-level keys to sample first (dependencies: sample the world
-      size before positions inside it); keys it omits are appended with one warning; unknown
-      keys raise SpaceError. Nested ``Dict`` spaces apply their own order.
+    - ``sampling_order`` lists keys (or dotted paths) to sample first (dependencies: sample the
+      world size before positions inside it); keys it omits are appended with one warning;
+      unknown ones raise SpaceError. Nested ``Dict`` spaces keep their own order unless a path
+      reaches into them. Reading it gives every node path in order, nested Dicts included
+      (``["world", "world.width", ...]``); assigning it reorders sampling.
     - ``constrain_fn(value_dict) -> bool`` sees this Dict's complete nested value. While a
       candidate is tested it is also the space's current value, so a function that reads
       ``env.variation_space.value[...]`` at the top level sees the candidate too (prefer that
       over ``space["a"].value``, as the seed documents). It is enforced by rejection sampling
       in :meth:`sample` and :meth:`update`; a nested Dict's ``constrain_fn`` gets its own subtree.
-    - ``init_value`` (nested or dotted, partial allowed) overrides the leaves' defaults.
+    - ``init_value`` (nested or dotted, partial allowed) overrides the leaves' own; as for a
+      leaf, a value out of bounds is accepted here and reported by :meth:`check`.
     - ``update(keys)`` resamples dotted names (a nested Dict name: its whole subtree); the name
-      ``"all"`` is reserved and resamples everything.
+      ``"all"`` is reserved and resamples everything. The space must pass ``check()`` afterwards.
     - ``set_value``/``set_init_value`` take nested or dotted dicts, partial ones too; like the
       leaves' setters they validate bounds, shapes and dtypes but do not call ``constrain_fn``.
 
@@ -77,10 +79,12 @@ class Dict(gym.spaces.Dict):
         if constrain_fn is not None and not callable(constrain_fn):
             raise SpaceError(f"Dict requires a callable constrain_fn, got {constrain_fn!r}")
         self.constrain_fn = constrain_fn
-        self._order = self._resolve_order(sampling_order)
-        if init_value is not None:
-            self.set_init_value(init_value)
-            self.set_value(init_value)
+        self._order = list(self.spaces)
+        if sampling_order is not None:
+            self.sampling_order = sampling_order
+        if init_value is not None:  # like the leaves' init_value: bounds are checked by check(), not here
+            for leaf, val in self._resolve_values(init_value, "init_value", in_bounds=False):
+                leaf._init_value = leaf._value = val
 
     # -- structure ------------------------------------------------------------------------------
     @staticmethod
@@ -92,27 +96,6 @@ class Dict(gym.spaces.Dict):
                 f"Dict requires stable_worldmodel spaces (Box, Discrete, MultiDiscrete, RGBBox, Dict) as values, "
                 f"got {type(space).__module__}.{type(space).__name__} for key {key!r}"
             )
-
-    def _resolve_order(self, sampling_order: Iterable[str] | None) -> list[str]:
-        keys = list(self.spaces)
-        if sampling_order is None:
-            return keys
-        if isinstance(sampling_order, str):
-            raise SpaceError(f"Dict requires sampling_order as a list of keys, got the string {sampling_order!r}")
-        order = list(sampling_order)
-        for key in order:
-            if key not in self.spaces:
-                hint = did_you_mean(key, keys)
-                raise SpaceError(
-                    f"Dict requires sampling_order keys of this Dict, got {key!r}.{hint} "
-                    f"Keys: {keys}. Nested Dicts take their own sampling_order."
-                )
-        if len(set(order)) != len(order):
-            raise SpaceError(f"Dict requires sampling_order without repeated keys, got {order}")
-        missing = [k for k in keys if k not in order]
-        if missing:
-            logger.warning("Dict sampling_order does not name %s; sampling them last, in insertion order", missing)
-        return order + missing
 
     def __getitem__(self, key: str) -> Any:
         """The subspace at ``key``; dotted paths (``"agent.color"``) reach nested spaces."""
@@ -145,11 +128,11 @@ class Dict(gym.spaces.Dict):
             if isinstance(space, Dict):
                 yield from space._node_paths(f"{prefix}{key}.")
 
-    def _leaves(self, ordered: bool = False, prefix: str = "") -> Iterator[tuple[str, StatefulSpaceMixin]]:
-        for key in self._order if ordered else self.spaces:
-            space = self.spaces[key]
+    def _leaves(self, prefix: str = "") -> Iterator[tuple[str, StatefulSpaceMixin]]:
+        """(dotted path, leaf) pairs in insertion order."""
+        for key, space in self.spaces.items():
             if isinstance(space, Dict):
-                yield from space._leaves(ordered, f"{prefix}{key}.")
+                yield from space._leaves(f"{prefix}{key}.")
             else:
                 yield prefix + key, space
 
@@ -165,12 +148,26 @@ class Dict(gym.spaces.Dict):
         return [path for path, _ in self._leaves()]
 
     @property
-    def sampling_order(self) -> KeysView[str]:
-        """Dotted leaf paths in sampling order.
+    def sampling_order(self) -> list[str]:
+        """Dotted paths of every node in sampling order, nested Dicts included before their children.
 
-        An ordered, set-like view: supports ``in``, iteration in order, ``len`` and set operations.
+        For ``{"a": .., "game": Dict({"world": Dict({"w": .., "h": ..}), "speed": ..})}`` sampled
+        game first: ``["game", "game.world", "game.world.w", "game.world.h", "game.speed", "a"]``.
+        A new list on every read. Set it to change the order in which :meth:`sample` and
+        :meth:`update` draw (rules in :func:`~stable_worldmodel.spaces._order.apply_sampling_order`).
         """
-        return dict.fromkeys(path for path, _ in self._leaves(ordered=True)).keys()
+        return list(self._ordered_paths())
+
+    @sampling_order.setter
+    def sampling_order(self, order: Iterable[str]) -> None:
+        apply_sampling_order(self, order)
+
+    def _ordered_paths(self, prefix: str = "") -> Iterator[str]:
+        for key in self._order:
+            yield prefix + key
+            space = self.spaces[key]
+            if isinstance(space, Dict):
+                yield from space._ordered_paths(f"{prefix}{key}.")
 
     # -- values -----------------------------------------------------------------------------------
     @property
@@ -184,7 +181,7 @@ class Dict(gym.spaces.Dict):
 
     @property
     def init_value(self) -> dict[str, Any]:
-        """Nested dict of the values :meth:`reset` restores."""
+        """Nested dict of the values :meth:`reset` restores (None for a leaf built without one)."""
         return {key: space.init_value for key, space in self.spaces.items()}
 
     @init_value.setter
@@ -204,7 +201,7 @@ class Dict(gym.spaces.Dict):
         for leaf, val in self._resolve_values(v, "init_value"):
             leaf._init_value = val
 
-    def _resolve_values(self, v: Any, what: str) -> list[tuple[StatefulSpaceMixin, Any]]:
+    def _resolve_values(self, v: Any, what: str, in_bounds: bool = True) -> list[tuple[StatefulSpaceMixin, Any]]:
         if not isinstance(v, Mapping):
             raise SpaceError(f"Dict requires a (nested or dotted) dict as {what}, got {short_repr(v)}")
         pending: list[tuple[StatefulSpaceMixin, Any]] = []
@@ -223,7 +220,7 @@ class Dict(gym.spaces.Dict):
                 elif isinstance(val, Mapping):
                     raise SpaceError(f"{node!r} requires an array-like {what} for {path!r}, got a dict")
                 else:
-                    pending.append((node, node._coerce(val, f"{what} for {path!r}")))
+                    pending.append((node, node._coerce(val, f"{what} for {path!r}", in_bounds)))
         return pending
 
     def reset(self) -> None:
@@ -251,19 +248,29 @@ class Dict(gym.spaces.Dict):
         return constraint_verdict(f"Dict with keys {list(self.spaces)}", self.constrain_fn, self.constrain_fn(value))
 
     def _failures(self, prefix: str = "") -> Iterator[str]:
+        """Dotted paths of invalid values, each with the reason: ``"a.b (unset)"``, ``"a (constrain_fn)"``.
+
+        A Dict's ``constrain_fn`` is only called when every value below it is valid.
+        """
+        failed = False
         for key, space in self.spaces.items():
             if isinstance(space, Dict):
-                yield from space._failures(f"{prefix}{key}.")
-            elif not space.contains(space._value):
-                yield prefix + key
-        if not self._satisfies(self.value):
-            yield f"{prefix or '<root>'} (constrain_fn)"
+                for failure in space._failures(f"{prefix}{key}."):
+                    failed = True
+                    yield failure
+            else:
+                problem = space._problem()
+                if problem is not None:
+                    failed = True
+                    yield f"{prefix}{key} ({problem})"
+        if not failed and not self._satisfies(self.value):
+            yield f"{prefix[:-1] or '<root>'} (constrain_fn)"
 
     def check(self, debug: bool = False) -> bool:
-        """True when every current value is valid; with ``debug`` logs which ones are not."""
+        """True when every value is set, in bounds and passes the constraints; ``debug`` logs which are not."""
         failed = list(self._failures())
         if failed and debug:
-            logger.warning("Dict.check: invalid current values at %s", failed)
+            warn(f"Dict: spaces {failed} failed check()")
         return not failed
 
     # -- sampling ----------------------------------------------------------------------------------
@@ -288,14 +295,33 @@ class Dict(gym.spaces.Dict):
 
         A key naming a nested Dict resamples its whole subtree; ``"all"`` resamples everything.
         Other leaves keep their values exactly. Unknown keys raise SpaceError (a ValueError).
+        Afterwards the whole space must pass :meth:`check` (as in release 0.0.3): if a value
+        elsewhere is unset or invalid, the failures are logged, the draws are undone and
+        :class:`SpaceCheckError` (also an ``AssertionError``) is raised.
         """
+        self._update(keys, require_valid=True)
+
+    def _update(self, keys: Iterable[str] | str, require_valid: bool) -> None:
         keys = [keys] if isinstance(keys, str) else list(keys)
         for key in keys:
             if key != "all" and self._lookup(key) is None:
                 raise self._unknown("update keys", key)
-        if "all" in keys:
-            self._resample(None, (), {}, 1000, 5.0, True, return_value=False)
-            return
+        selection = None if "all" in keys else self._selection(keys)
+        snapshot = self._snapshot()
+        if selection != {}:
+            self._resample(selection, (), {}, 1000, 5.0, True, return_value=False)
+        failed = list(self._failures()) if require_valid else []
+        if failed:
+            warn(f"Dict: spaces {failed} failed check()")
+            self._restore(snapshot)
+            raise SpaceCheckError(
+                f"Dict.update requires the other values of the space to be valid, got {failed} after resampling "
+                f"{keys}; give those spaces an init_value, or set_value()/sample() them first"
+            )
+
+    @staticmethod
+    def _selection(keys: list[str]) -> _Selection:
+        """The tree of dotted ``keys`` to resample: a key maps to None (whole subspace) or to its selected children."""
         selection: _Selection = {}
         for key in keys:
             *parents, leaf = key.split(".")
@@ -306,8 +332,7 @@ class Dict(gym.spaces.Dict):
                     break
             else:
                 node[leaf] = None
-        if selection:
-            self._resample(selection, (), {}, 1000, 5.0, True, return_value=False)
+        return selection
 
     def _resample(
         self,
@@ -320,7 +345,7 @@ class Dict(gym.spaces.Dict):
         return_value: bool = True,
     ) -> dict[str, Any] | None:
         """Resample ``selection`` (None: everything) atomically; return the new nested value."""
-        snapshot = [(leaf, leaf._value) for _, leaf in self._leaves()]
+        snapshot = self._snapshot()
         try:
             self._sample_in_place(selection, args, kwargs, max_tries, warn_after_s)
         except BaseException:
@@ -349,6 +374,9 @@ class Dict(gym.spaces.Dict):
 
         accept = None if self.constrain_fn is None else (lambda _: self._satisfies(self.value))
         rejection_sample(self, draw, accept, max_tries, warn_after_s)
+
+    def _snapshot(self) -> list[tuple[StatefulSpaceMixin, Any]]:
+        return [(leaf, leaf._value) for _, leaf in self._leaves()]
 
     @staticmethod
     def _restore(snapshot: list[tuple[StatefulSpaceMixin, Any]]) -> None:

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import logging
 import time
 from collections.abc import Callable
 from typing import Any
@@ -11,8 +10,7 @@ import gymnasium as gym
 import numpy as np
 
 from ..errors import SpaceError
-
-logger = logging.getLogger(__name__)
+from ._report import warn
 
 __all__ = ["Box", "Discrete", "MultiDiscrete", "RGBBox", "StatefulSpaceMixin", "rejection_sample", "short_repr"]
 
@@ -43,16 +41,16 @@ def rejection_sample(
         if accept(candidate):
             return candidate
         if not warned and time.perf_counter() - start > warn_after_s:
-            logger.warning(
-                "%s.sample: %d draws rejected by constrain_fn in %.1f s; the constraint may be too strict",
-                type(owner).__name__,
-                tries,
-                time.perf_counter() - start,
+            elapsed = time.perf_counter() - start
+            warn(
+                f"{type(owner).__name__}.sample: {tries} draws rejected by constrain_fn in {elapsed:.1f} s; "
+                "the constraint may be too strict"
             )
             warned = True
     raise RuntimeError(
         f"{type(owner).__name__}.sample requires a constrain_fn that accepts some draw, got {max_tries} "
-        f"rejections in a row for {owner!r}; loosen the constraint or raise max_tries"
+        f"rejections in a row for {owner!r} (constrain_fn not satisfied after {max_tries} draws); "
+        "loosen the constraint or raise max_tries"
     )
 
 
@@ -129,16 +127,13 @@ class StatefulSpaceMixin:
     """Value, init value, constraint and rejection sampling shared by the leaf spaces.
 
     Put it before the Gymnasium class in the bases; subclasses call :meth:`_setup_state` at the
-    end of ``__init__`` and may override :meth:`_default_value`, :meth:`_draw` and :meth:`_in_base`.
+    end of ``__init__`` and may override :meth:`_draw` and :meth:`_in_base`.
     """
 
     constrain_fn: Callable[[Any], bool] | None
     _scalar_value = False  # True: a shape-() value is kept as a numpy scalar, not a 0-d array
 
     # -- hooks --------------------------------------------------------------------------------
-    def _default_value(self) -> Any:
-        raise NotImplementedError("_default_value() -> an element of the space")
-
     def _draw(self, *args: Any, **kwargs: Any) -> Any:
         """One unconstrained draw (gymnasium's sampler)."""
         return super().sample(*args, **kwargs)  # type: ignore[misc]
@@ -149,40 +144,46 @@ class StatefulSpaceMixin:
 
     # -- state --------------------------------------------------------------------------------
     def _setup_state(self, init_value: Any, constrain_fn: Callable[[Any], bool] | None) -> None:
+        """Store ``constrain_fn`` and ``init_value`` (None stays None; out of bounds is allowed here)."""
         if constrain_fn is not None and not callable(constrain_fn):
             raise SpaceError(f"{type(self).__name__} requires a callable constrain_fn, got {constrain_fn!r}")
         self.constrain_fn = constrain_fn
-        what = "init_value"
-        if init_value is None:
-            init_value, what = self._default_value(), "default init_value"
-        self._init_value = self._coerce(init_value, what)
+        self._init_value = None if init_value is None else self._coerce(init_value, "init_value", in_bounds=False)
         self._value = self._init_value
 
-    def _coerce(self, v: Any, what: str = "value") -> Any:
-        """``v`` as an element of this space's dtype and shape; SpaceError if it does not fit."""
+    def _coerce(self, v: Any, what: str = "value", in_bounds: bool = True) -> Any:
+        """``v`` as an element of this space's dtype and shape; SpaceError if it does not fit.
+
+        With ``in_bounds=False`` a value outside the bounds is kept (``check()`` reports it later);
+        the shape and a lossless cast to the dtype are still required.
+        """
         name = f"{self!r}"
         try:
             arr = np.asarray(v)
         except (TypeError, ValueError) as exc:
             raise SpaceError(f"{name} requires a numeric {what}, got {v!r}") from exc
         if arr.shape != self.shape:
-            raise SpaceError(f"{name} requires {what} of shape {self.shape}, got {short_repr(v)} with shape {arr.shape}")
+            raise SpaceError(
+                f"{name} requires {what} of shape {self.shape}, got {short_repr(v)} with shape {arr.shape}"
+            )
         if arr.dtype != self.dtype:
             if not (np.issubdtype(arr.dtype, np.number) or arr.dtype == np.bool_):
                 raise SpaceError(f"{name} requires a numeric {what}, got {short_repr(v)} of dtype {arr.dtype}")
             with np.errstate(invalid="ignore", over="ignore"):
                 cast = arr.astype(self.dtype)
             if np.issubdtype(self.dtype, np.integer) and not np.array_equal(cast, arr):
-                raise SpaceError(f"{name} requires {what} to be an integer within its bounds, got {short_repr(v)}")
+                raise SpaceError(
+                    f"{name} requires {what} of integers that {self.dtype} can hold exactly, got {short_repr(v)}"
+                )
             arr = cast
         arr = arr[()] if self._scalar_value else np.array(arr, copy=True)
-        if not self._in_base(arr):
+        if in_bounds and not self._in_base(arr):
             raise SpaceError(f"{name} requires {what} inside its bounds, got {short_repr(v)}")
         return arr
 
     @property
     def value(self) -> Any:
-        """The current element (a copy for arrays: change it with :meth:`set_value`)."""
+        """The current element, or None before one is set (a copy for arrays: change it with :meth:`set_value`)."""
         v = self._value
         return v.copy() if isinstance(v, np.ndarray) else v
 
@@ -192,7 +193,7 @@ class StatefulSpaceMixin:
 
     @property
     def init_value(self) -> Any:
-        """The element :meth:`reset` restores (a copy for arrays)."""
+        """The element :meth:`reset` restores, or None when the space was built without one (a copy for arrays)."""
         v = self._init_value
         return v.copy() if isinstance(v, np.ndarray) else v
 
@@ -209,7 +210,7 @@ class StatefulSpaceMixin:
         self._init_value = self._coerce(v, "init_value")
 
     def reset(self) -> None:
-        """Set the current value back to ``init_value``."""
+        """Set the current value back to ``init_value`` (None when the space was built without one)."""
         self._value = self._init_value
 
     # -- membership ---------------------------------------------------------------------------
@@ -219,15 +220,34 @@ class StatefulSpaceMixin:
         return constraint_verdict(repr(self), self.constrain_fn, self.constrain_fn(x))
 
     def contains(self, x: Any) -> bool:
-        """True when ``x`` is inside the bounds and satisfies ``constrain_fn``."""
-        return self._in_base(x) and self._satisfies(x)
+        """True when ``x`` is inside the bounds and satisfies ``constrain_fn`` (False for None)."""
+        return x is not None and self._in_base(x) and self._satisfies(x)
+
+    def _problem(self) -> str | None:
+        """Why the current value is invalid (``"unset"``, ``"out of bounds"``, ``"constrain_fn"``), else None."""
+        if self._value is None:
+            return "unset"
+        if not self._in_base(self._value):
+            return "out of bounds"
+        return None if self._satisfies(self._value) else "constrain_fn"
 
     def check(self) -> bool:
-        """True when the current value is valid; logs a warning when it is not."""
-        ok = self.contains(self._value)
-        if not ok:
-            logger.warning("%r: current value %s is outside the space or breaks constrain_fn", self, short_repr(self._value))
-        return ok
+        """True when the current value is set, inside the bounds and satisfies ``constrain_fn``.
+
+        Otherwise logs one warning (through ``stable_worldmodel.spaces.logging``) saying which.
+        """
+        problem = self._problem()
+        if problem is None:
+            return True
+        shown = short_repr(self._value)
+        warn(
+            {
+                "unset": f"{self!r}: value is None (no init_value); give one with set_value() or sample()",
+                "out of bounds": f"{self!r}: value {shown} is outside the space bounds",
+                "constrain_fn": f"{self!r}: value {shown} does not satisfy constrain_fn",
+            }[problem]
+        )
+        return False
 
     def seed(self, seed: int | None = None) -> Any:
         """Seed the sampler (numpy integers are accepted)."""
@@ -278,7 +298,7 @@ class StatefulSpaceMixin:
 
 
 class Box(StatefulSpaceMixin, gym.spaces.Box):
-    """A ``gymnasium.spaces.Box`` with a value; ``init_value=None`` -> midpoint of the bounds.
+    """A ``gymnasium.spaces.Box`` with a value (None until set when built without ``init_value``).
 
     Example (circle constraint)::
 
@@ -302,15 +322,6 @@ class Box(StatefulSpaceMixin, gym.spaces.Box):
                 self._fast = (low, span + 1.0 if self._integer else span)  # integers: floor(u * (span + 1))
         self._setup_state(init_value, constrain_fn)
 
-    def _default_value(self) -> np.ndarray:
-        low, high = self.low.astype(np.float64), self.high.astype(np.float64)
-        lo_ok, hi_ok = np.isfinite(low), np.isfinite(high)
-        with np.errstate(invalid="ignore"):
-            mid = np.where(lo_ok & hi_ok, 0.5 * low + 0.5 * high, np.where(lo_ok, low, np.where(hi_ok, high, 0.0)))
-        if self._integer:
-            mid = np.floor(mid)
-        return mid.astype(self.dtype)
-
     def _draw(self, *args: Any, **kwargs: Any) -> np.ndarray:
         if self._fast is None or any(a is not None for a in args) or any(v is not None for v in kwargs.values()):
             return super()._draw(*args, **kwargs)
@@ -331,7 +342,7 @@ class Box(StatefulSpaceMixin, gym.spaces.Box):
 
 
 class Discrete(StatefulSpaceMixin, gym.spaces.Discrete):
-    """A ``gymnasium.spaces.Discrete`` with a value (an ``np.int64``); default ``init_value`` is ``start``.
+    """A ``gymnasium.spaces.Discrete`` with a value (an ``np.int64``, or None until set).
 
     Example::
 
@@ -351,12 +362,10 @@ class Discrete(StatefulSpaceMixin, gym.spaces.Discrete):
         _gym_init(type(self).__name__, super().__init__, args, kwargs)
         self._setup_state(init_value, constrain_fn)
 
-    def _default_value(self) -> np.int64:
-        return self.start
 
 
 class MultiDiscrete(StatefulSpaceMixin, gym.spaces.MultiDiscrete):
-    """A ``gymnasium.spaces.MultiDiscrete`` with a value; default ``init_value`` is ``start``.
+    """A ``gymnasium.spaces.MultiDiscrete`` with a value (an array, or None until set).
 
     ``constrain_fn`` receives the whole array. Example::
 
@@ -384,9 +393,6 @@ class MultiDiscrete(StatefulSpaceMixin, gym.spaces.MultiDiscrete):
                 )
         _gym_init(type(self).__name__, super().__init__, args, kwargs)
         self._setup_state(init_value, constrain_fn)
-
-    def _default_value(self) -> np.ndarray:
-        return np.asarray(self.start, dtype=self.dtype)
 
 
 class RGBBox(Box):
