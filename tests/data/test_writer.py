@@ -306,8 +306,9 @@ def test_every_state_between_two_system_calls_opens_plainly(tmp_path, monkeypatc
 def test_sigkill_at_random_moments_keeps_every_committed_episode(tmp_path, synth):
     path = tmp_path / "killed.h5"
     rng = random.Random(0)
-    seen = 0
-    for _ in range(15):
+    seen = kills = 0
+    while kills < 15 or (seen <= 10 and kills < 100):  # a loaded machine records fewer episodes per child
+        kills += 1
         proc = _fork(_record_forever, path, synth)
         time.sleep(rng.uniform(0.0, 0.1))
         os.kill(proc.pid, signal.SIGKILL)
