@@ -13,6 +13,7 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from . import keys
 from ._lazy import lazy_getattr
 from .errors import ConfigError
 
@@ -32,6 +33,7 @@ _LAZY = {
     "WorldModelPolicy": "stable_worldmodel.planning",
     "AutoCostModel": "stable_worldmodel.planning",
     "AutoActionableModel": "stable_worldmodel.planning",
+    "_load_model_with_attribute": "stable_worldmodel.planning.auto",  # seed 000's helper
 }
 
 
@@ -114,6 +116,17 @@ class BasePolicy:
     def get_action(self, obs: Any, **kwargs: Any) -> Any:
         raise NotImplementedError("get_action(info_dict) -> actions shaped like env.action_space")
 
+    def _prepare_info(self, info_dict: dict) -> dict:
+        """The World's numpy infos -> a new dict of torch tensors for a model (needs torch).
+
+        Applies the policy's ``process`` (fitted normalizers) and ``transform`` (callables,
+        e.g. image transforms) when it has them; see
+        :func:`~stable_worldmodel.planning.io.prepare_info`. ``info_dict`` is not modified.
+        """
+        from .planning.io import prepare_info
+
+        return prepare_info(info_dict, getattr(self, "process", None), getattr(self, "transform", None))
+
     def _require_env(self) -> Any:
         if self.env is None:
             raise RuntimeError(
@@ -123,7 +136,11 @@ class BasePolicy:
 
 
 class RandomPolicy(BasePolicy):
-    """Samples the env's batched action space; seeded with ``seed`` / :meth:`set_seed`."""
+    """Samples the env's batched action space.
+
+    ``seed`` is applied by :meth:`set_seed`, which ``World.set_policy`` calls once after
+    :meth:`set_env`; :meth:`set_env` itself leaves the space's random stream alone.
+    """
 
     def __init__(self, seed: int | None = None, **kwargs: Any):
         super().__init__(**kwargs)
@@ -138,8 +155,6 @@ class RandomPolicy(BasePolicy):
         self._uniform_box = (
             type(space).__name__ == "Box" and np.dtype(space.dtype).kind == "f" and bool(space.is_bounded("both"))
         )
-        if self.seed is not None:
-            space.seed(self.seed)
 
     def set_seed(self, seed: int | None) -> None:
         self.seed = seed
@@ -154,37 +169,62 @@ class RandomPolicy(BasePolicy):
 
 
 class ExpertPolicy(BasePolicy):
-    """Base of the scripted experts of the built-in envs (see ``swm.envs.expert_policy``)."""
+    """Base of the scripted experts of the built-in envs (see ``swm.envs.expert_policy``).
+
+    Subclasses override :meth:`get_action`; the base returns None (no expert action).
+    """
 
     def __init__(self, **kwargs: Any):
         super().__init__(**kwargs)
         self.type = "expert"
 
     def get_action(self, obs: Any, goal_obs: Any = None, **kwargs: Any) -> Any:
-        raise NotImplementedError("get_action(info_dict) -> actions shaped like env.action_space")
+        """The expert's actions shaped like ``env.action_space``; None here (no expert logic)."""
+        return None
 
 
 class FeedForwardPolicy(BasePolicy):
     """Acts with ``model.get_action(info)`` on torch tensors (a behaviour-cloning style policy).
 
-    ``process[key].transform`` and ``transform[key]`` are applied to the inputs like in
-    ``WorldModelPolicy``; ``process["action"].inverse_transform`` to the output.
+    - Inputs: ``process[key].transform`` then ``transform[key]`` as in ``WorldModelPolicy``
+      (:meth:`_prepare_info`); ``goal`` is also given as ``goal_pixels`` (the GCBC models'
+      key); tensors are moved to the model's device.
+    - Output: the model's actions as a numpy array, through ``process["action"].inverse_transform``
+      (on the ``(-1, A)`` view), reshaped to ``env.action_space.shape`` when it has that many
+      numbers. They are not clipped or cast: the env receives what the model asked for.
+    - ``process`` and ``transform`` are kept as the given objects (later changes are seen);
+      the model is put in eval mode.
     """
 
     def __init__(self, model: Any, process: dict[str, Transformable] | None = None, transform: dict | None = None, **kwargs: Any):
         super().__init__(**kwargs)
         self.type = "feed_forward"
         self.model = model
-        self.process = dict(process or {})
-        self.transform = dict(transform or {})
+        if callable(getattr(model, "eval", None)):
+            model.eval()
+        self.process = process if process is not None else {}
+        self.transform = transform if transform is not None else {}
 
     def get_action(self, info_dict: dict, **kwargs: Any) -> np.ndarray:
         import torch
 
-        from .planning.io import prepare_info, to_env_actions
+        from .planning.io import apply_process
 
         env = self._require_env()
-        info = prepare_info(info_dict, self.process, self.transform)
+        info = self._prepare_info(info_dict)
+        if keys.GOAL in info:
+            info.setdefault(keys.goal_key(keys.PIXELS), info[keys.GOAL])
+        params = self.model.parameters() if callable(getattr(self.model, "parameters", None)) else ()
+        param = next(iter(params), None)
+        if param is not None:
+            info = {k: v.to(param.device) if torch.is_tensor(v) else v for k, v in info.items()}
         with torch.no_grad():
             action = self.model.get_action(info)
-        return to_env_actions(action, self.process, env.action_space)
+        action = action.detach().cpu().numpy() if torch.is_tensor(action) else np.asarray(action)
+        proc = self.process.get(keys.ACTION)
+        if proc is not None:
+            action = apply_process(proc.inverse_transform, action)
+        shape = tuple(getattr(env.action_space, "shape", None) or ())
+        if shape and action.shape != shape and action.size == int(np.prod(shape)):
+            action = action.reshape(shape)
+        return action

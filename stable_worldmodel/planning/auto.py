@@ -18,9 +18,23 @@ from ..errors import ConfigError, UnknownNameError, did_you_mean
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["AutoActionableModel", "AutoCostModel", "list_model_checkpoints", "model_cache_dir"]
+__all__ = [
+    "AutoActionableModel",
+    "AutoCostModel",
+    "MissingAttributeError",
+    "list_model_checkpoints",
+    "model_cache_dir",
+]
 
 SUFFIX = "_object.ckpt"
+
+
+class MissingAttributeError(ConfigError, RuntimeError):
+    """A loaded checkpoint in which no module has the requested method or attribute.
+
+    A :class:`~stable_worldmodel.errors.ConfigError` (so a ``ValueError``) and, as the original
+    release documented for ``AutoCostModel``/``AutoActionableModel``, a ``RuntimeError``.
+    """
 
 
 def model_cache_dir(cache_dir: str | Path | None = None) -> Path:
@@ -145,20 +159,32 @@ def _unknown(caller: str, model_name: str | Path, root: Path) -> UnknownNameErro
     )
 
 
-def _find_module(obj: Any, method: str) -> Any:
-    """``obj`` itself or its first sub-module (depth-first) with a callable ``method``."""
-    if callable(getattr(obj, method, None)):
+def _find_module(obj: Any, method: str, *, need_callable: bool = True) -> Any:
+    """``obj`` itself or its first sub-module (depth-first) with ``method`` (callable, unless ``need_callable=False``)."""
+
+    def has(candidate: Any) -> bool:
+        return callable(getattr(candidate, method, None)) if need_callable else hasattr(candidate, method)
+
+    if has(obj):
         return obj
     import torch
 
     if isinstance(obj, torch.nn.Module):
         for module in obj.modules():
-            if callable(getattr(module, method, None)):
+            if has(module):
                 return module
     return None
 
 
-def _load_with(caller: str, model_name: str | Path, method: str, cache_dir: str | Path | None, allow_pickle: bool | None) -> Any:
+def _load_with(
+    caller: str,
+    model_name: str | Path,
+    method: str,
+    cache_dir: str | Path | None,
+    allow_pickle: bool | None,
+    *,
+    need_callable: bool = True,
+) -> Any:
     import torch
 
     root = model_cache_dir(cache_dir)
@@ -175,10 +201,14 @@ def _load_with(caller: str, model_name: str | Path, method: str, cache_dir: str 
             raise _unknown(caller, model_name, root)
         logger.info("loading %s from %s", method, path)
         obj = _load_pickle(path, caller, allow_pickle)
-    module = _find_module(obj, method)
+    module = _find_module(obj, method, need_callable=need_callable)
     if module is None:
         hint = " (a state_dict: put the config.json of its model beside it)" if isinstance(obj, dict) else ""
-        raise ConfigError(f"{caller} requires a module with {method}() in {path}, got {type(obj).__name__}{hint}")
+        what = f"{method}()" if need_callable else repr(method)
+        raise MissingAttributeError(
+            f"{caller} requires a module with {what} in {path}, got {type(obj).__name__}{hint}. "
+            f"No module with '{method}' found in the loaded world model."
+        )
     if isinstance(module, torch.nn.Module):
         module.eval()
     return module
@@ -194,7 +224,8 @@ def AutoCostModel(model_name: str | Path, cache_dir: str | Path | None = None, *
     file, ``<cache>/<model_name>_object.ckpt``, or a folder holding exactly one
     ``*_object.ckpt`` (see :func:`_pickled_path`). Unpickling runs code stored in the file:
     it warns, naming the file, and ``allow_pickle=False`` (or ``STABLEWM_REFUSE_PICKLE=1``)
-    refuses it. The module returned is the object itself or its first sub-module with ``get_cost``.
+    refuses it. The module returned is the object itself or its first sub-module with ``get_cost``;
+    when there is none, :class:`MissingAttributeError` (a ``RuntimeError`` and a ``ConfigError``).
     """
     return _load_with("AutoCostModel", model_name, "get_cost", cache_dir, allow_pickle)
 
@@ -202,3 +233,18 @@ def AutoCostModel(model_name: str | Path, cache_dir: str | Path | None = None, *
 def AutoActionableModel(model_name: str | Path, cache_dir: str | Path | None = None, *, allow_pickle: bool | None = None) -> Any:  # noqa: N802
     """Like :func:`AutoCostModel`, returning the module with ``get_action`` (for FeedForwardPolicy)."""
     return _load_with("AutoActionableModel", model_name, "get_action", cache_dir, allow_pickle)
+
+
+def _load_model_with_attribute(
+    run_name: str | Path, attribute_name: str, cache_dir: str | Path | None = None, *, allow_pickle: bool | None = None
+) -> Any:
+    """Load checkpoint ``run_name`` and return its first module that has ``attribute_name`` (in eval mode).
+
+    The helper behind :func:`AutoCostModel` and :func:`AutoActionableModel` (seed 000's name):
+    ``run_name`` is resolved like there, and the checkpoint object itself, then its sub-modules
+    depth-first, are searched for the attribute (any attribute, not only methods). Raises
+    :class:`MissingAttributeError` (a ``RuntimeError``) when no module has it.
+    """
+    return _load_with(
+        "_load_model_with_attribute", run_name, attribute_name, cache_dir, allow_pickle, need_callable=False
+    )

@@ -10,6 +10,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 import torch
+from gymnasium.vector.utils import batch_space
 
 from .. import keys
 from ..errors import ConfigError, UnknownNameError
@@ -33,8 +34,10 @@ class WorldModelPolicy(BasePolicy):
     """Plan with ``solver`` every ``receding_horizon`` blocks, act from the plan in between.
 
     - :meth:`set_env` configures the solver with the env's batched action space and
-      ``num_envs``. When ``process["action"]`` exists and the Box bounds are finite, the
-      solver gets the bounds mapped through ``process["action"].transform`` (it plans in
+      ``num_envs``; a single env (no ``num_envs``) is planned for as a batch of one, and
+      :meth:`get_action` then takes its infos ``(T, ...)`` and returns one action shaped like
+      its ``action_space``. When ``process["action"]`` exists and the Box bounds are finite,
+      the solver gets the bounds mapped through ``process["action"].transform`` (it plans in
       the model's normalized action units).
     - :meth:`get_action` (``info_dict``: the World's numpy infos ``(B, T, ...)``) replans
       only when its action buffer is empty: infos go through
@@ -70,15 +73,22 @@ class WorldModelPolicy(BasePolicy):
                 raise ConfigError(f"WorldModelPolicy requires process[{key!r}] with transform/inverse_transform, got {proc!r}")
         self.type = "world_model"
         self.solver, self.cfg = solver, config
-        self.process = dict(process or {})
-        self.transform = dict(transform or {})
+        self.process = process if process is not None else {}
+        self.transform = transform if transform is not None else {}
         self.last_plan: dict | None = None
+        self._space: gym.Space | None = None  # the batched action space planned for
+        self._single = False  # the env has no num_envs: actions are returned without the batch axis
         self.reset_plan()
 
     @property
     def config(self) -> PlanConfig:
         """The planning configuration."""
         return self.cfg
+
+    @property
+    def flatten_receding_horizon(self) -> int:
+        """Env steps executed per plan: ``receding_horizon * action_block``."""
+        return self.cfg.receding_horizon * self.cfg.action_block
 
     def reset_plan(self) -> None:
         """Forget the queued actions and the warm start: the next call replans from scratch."""
@@ -87,10 +97,16 @@ class WorldModelPolicy(BasePolicy):
         self._next_init: torch.Tensor | None = None
 
     def set_env(self, env: Any) -> None:
-        """Attach the vector env and configure the solver for its batched action space."""
+        """Attach the env and configure the solver for its batched action space.
+
+        A vector env gives ``num_envs`` and a batched ``action_space``; an env without
+        ``num_envs`` is one env, and its action space is batched here (B = 1).
+        """
         super().set_env(env)
-        space = self._planning_space(env.action_space)
-        self.solver.configure(action_space=space, n_envs=int(env.num_envs), config=self.cfg)
+        self._single = not hasattr(env, "num_envs")
+        self._space = batch_space(env.action_space, 1) if self._single else env.action_space
+        n_envs = 1 if self._single else int(env.num_envs)
+        self.solver.configure(action_space=self._planning_space(self._space), n_envs=n_envs, config=self.cfg)
         self.reset_plan()
 
     def set_seed(self, seed: int | None) -> None:
@@ -112,16 +128,18 @@ class WorldModelPolicy(BasePolicy):
         return gym.spaces.Box(low, high, dtype=np.float32)
 
     def get_action(self, info_dict: Mapping[str, Any], **kwargs: Any) -> np.ndarray:
-        """The next env actions ``(B, ...)``; replans when the buffer is empty."""
-        env = self._require_env()
-        if self.solver.n_envs is None:
+        """The next env actions ``(B, ...)`` (one env: its action); replans when the buffer is empty."""
+        self._require_env()
+        if self.solver.n_envs is None or self._space is None:
             raise ConfigError("WorldModelPolicy requires set_env(env) before get_action (it configures the solver)")
+        if self._single:  # one env's infos: give them the batch axis the solver plans over
+            info_dict = {k: v[None] if hasattr(v, "shape") else np.asarray(v)[None] for k, v in info_dict.items()}
         restarted = self._env_restarted(info_dict)  # first: at a plan boundary it still drops the warm start
         if restarted or self._queue is None or self._pos >= self._queue.shape[1]:
-            self._replan(info_dict, env)
+            self._replan(info_dict)
         action = self._queue[:, self._pos]
         self._pos += 1
-        return action
+        return action[0] if self._single else action
 
     def _env_restarted(self, info_dict: Mapping[str, Any]) -> bool:
         """True when an env started a new episode since the last plan (its ``step_idx`` is 0
@@ -135,7 +153,7 @@ class WorldModelPolicy(BasePolicy):
             self._next_init = None
         return restarted
 
-    def _replan(self, info_dict: Mapping[str, Any], env: Any) -> None:
+    def _replan(self, info_dict: Mapping[str, Any]) -> None:
         info = prepare_info(info_dict, self.process, self.transform)
         try:
             result = self.solver.solve(info, init_action=self._next_init)
@@ -150,6 +168,6 @@ class WorldModelPolicy(BasePolicy):
         plan = result["actions"]
         rh = self.cfg.receding_horizon
         self._next_init = plan[:, rh:] if self.cfg.warm_start and rh < plan.shape[1] else None
-        self._queue = to_env_actions(plan[:, :rh], self.process, env.action_space, steps=True)
+        self._queue = to_env_actions(plan[:, :rh], self.process, self._space, steps=True)
         self._pos = 0
         self.last_plan = result

@@ -91,7 +91,7 @@ class BaseSolver:
         if not callable(getattr(model, "get_cost", None)):
             raise ConfigError(f"{type(self).__name__} requires a model with get_cost(info, candidates), got {model!r}")
         self._check_common(batch_size=batch_size, num_samples=num_samples, n_steps=n_steps, topk=topk, device=device)
-        var_scale = self._check_number("var_scale", var_scale, minimum=0.0, strict=True)
+        var_scale = self._check_number("var_scale", var_scale, minimum=0.0)  # 0: no noise
         self.model = model
         self.batch_size = batch_size
         self.num_samples = int(num_samples)

@@ -7,17 +7,19 @@ from typing import Any
 import torch
 
 from ._registry import register_solver
+from ._start import GaussianStart
 from .base import AUTO_BATCH, BaseSolver
 
 
 @register_solver("cem")
-class CEMSolver(BaseSolver):
+class CEMSolver(GaussianStart, BaseSolver):
     """Cross-Entropy Method over action sequences, batched over envs.
 
     Each of ``n_steps`` iterations samples ``num_samples`` candidates ``(B, S, H, A)``
     around the mean (candidate 0 is the mean itself), clamps them into the Box bounds,
     and refits mean and std to the ``topk`` cheapest. The initial std is ``var_scale``
-    (in action units); the initial mean is ``init_action`` (warm start) or zeros.
+    (in action units; 0 samples nothing but the mean); the initial mean is ``init_action``
+    (warm start) or zeros. :meth:`init_action_distrib` returns that starting ``(mean, var)``.
 
     ``batch_size``: the default (shown as 1, the original's value) plans all envs in one
     pass; an explicit int caps the envs per pass (``batch_size=1`` is the original's

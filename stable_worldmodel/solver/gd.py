@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Mapping
 from typing import Any
 
@@ -22,8 +23,12 @@ class GradientSolver(BaseSolver):
     model's ``.grad`` are untouched), steps the optimizer, adds ``action_noise`` noise and
     clamps into the Box bounds. The cheapest sample after the last step is returned.
     ``optimizer_kwargs`` default to ``{"lr": 0.1}``; ``batch_size=None`` plans all envs in
-    one pass. Returns ``actions: (B, H, A)`` and ``costs: (B,)``.
+    one pass. Returns ``actions: (B, H, A)`` and ``costs: (B,)``. :meth:`init_action` draws
+    the starting plans of the next solve into :attr:`init` (``var_scale=0``: no noise).
     """
+
+    #: starting plans ``(B, S, H, A)`` drawn by the last :meth:`init_action` call (None before)
+    init: torch.Tensor | None = None
 
     def __init__(
         self,
@@ -54,6 +59,23 @@ class GradientSolver(BaseSolver):
         if "lr" in self.optimizer_kwargs:  # the learning rate: 0 freezes the plans, negative or NaN ascends/breaks
             self._check_number("optimizer_kwargs['lr'] (the learning rate)", self.optimizer_kwargs["lr"], minimum=0.0)
         self.optimizer_cls = optimizer_cls
+
+    def init_action(self, actions: Any = None) -> None:
+        """Draw the starting plans of the next :meth:`solve` into :attr:`init`: ``(B, S, H, A)``.
+
+        Sample 0 is ``actions: (B, k <= H, A)`` padded with zeros (zeros without it), clamped
+        into the Box bounds; the other samples add ``var_scale`` noise. The draw is the one the
+        next solve makes, and the random stream is not advanced (seed 000's ``init_action``).
+        """
+        self._require_configured()
+        self.init = self._draw_start(self._pad_init(actions))
+
+    def _draw_start(self, init: torch.Tensor | None) -> torch.Tensor:
+        """:meth:`_init_variable` for all envs with the next solve's seed, leaving the stream as it is."""
+        self._solve_seed = int(copy.deepcopy(self._seed_rng).integers(0, 2**62))
+        self._rows, self._draw = (0, self.n_envs), 0
+        with torch.no_grad():
+            return self._init_variable(init)
 
     # -- hooks for relaxations (see discrete_solvers.PGDSolver) ------------------------------
     def _init_variable(self, init_action: torch.Tensor | None) -> torch.Tensor:
@@ -90,6 +112,12 @@ class GradientSolver(BaseSolver):
         with torch.enable_grad():
             for _ in range(self.n_steps):
                 costs = self._cost(info_s, self._candidates(x))
+                if not costs.requires_grad:
+                    raise ConfigError(
+                        f"{type(self).__name__} requires get_cost to be differentiable in the candidates "
+                        f"(Cost must requires_grad for {self.name.upper()} solver), got costs without a graph; "
+                        "do not call it under torch.no_grad() or detach the candidates, or use a sampling solver (cem)"
+                    )
                 (x.grad,) = torch.autograd.grad(costs.sum(), [x])
                 optimizer.step()
                 with torch.no_grad():

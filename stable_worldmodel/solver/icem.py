@@ -7,6 +7,7 @@ from typing import Any
 import torch
 
 from ._registry import register_solver
+from ._start import GaussianStart
 from .base import AUTO_BATCH, BaseSolver
 
 
@@ -38,7 +39,7 @@ def coloring_matrix(
 
 
 @register_solver("icem")
-class ICEMSolver(BaseSolver):
+class ICEMSolver(GaussianStart, BaseSolver):
     """Improved CEM, batched over envs.
 
     Differences from :class:`~stable_worldmodel.solver.CEMSolver`: noise is colored along

@@ -7,11 +7,12 @@ from typing import Any
 import torch
 
 from ._registry import register_solver
+from ._start import GaussianStart
 from .base import AUTO_BATCH, BaseSolver
 
 
 @register_solver("mppi")
-class MPPISolver(BaseSolver):
+class MPPISolver(GaussianStart, BaseSolver):
     """MPPI over action sequences, batched over envs.
 
     Each of ``n_steps`` iterations samples ``num_samples`` candidates ``(B, S, H, A)``

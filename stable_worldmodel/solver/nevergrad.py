@@ -48,6 +48,7 @@ class NevergradSolver(BaseSolver):
 
             raise unknown_name("nevergrad optimizer", optimizer, self._ng.optimizers.registry)
         super().__init__(model, batch_size, num_samples, var_scale, device, seed, n_steps)
+        self._check_number("var_scale", var_scale, minimum=0.0, strict=True)  # the mutation sigma: 0 never moves
         self.optimizer = optimizer
 
     def _make_optimizer(self, row: int, start: np.ndarray) -> Any:

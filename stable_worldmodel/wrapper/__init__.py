@@ -2,7 +2,7 @@
 
 from .checks import EnsureGoalInfoWrapper, EnsureImageShape, EnsureInfoKeysWrapper
 from .goal import ResizeGoalWrapper
-from .info import EverythingToInfoWrapper
+from .info import EverythingToInfoWrapper, InfoKeyCollisionError, UnsupportedActionSpaceError
 from .mega import MegaWrapper
 from .pixels import AddPixelsWrapper, SupportsMultiview
 from .stack import StackedWrapper
@@ -14,9 +14,11 @@ __all__ = [
     "EnsureImageShape",
     "EnsureInfoKeysWrapper",
     "EverythingToInfoWrapper",
+    "InfoKeyCollisionError",
     "MegaWrapper",
     "ResizeGoalWrapper",
     "StackedWrapper",
     "SupportsMultiview",
+    "UnsupportedActionSpaceError",
     "VariationWrapper",
 ]

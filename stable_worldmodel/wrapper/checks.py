@@ -46,8 +46,8 @@ class EnsureInfoKeysWrapper(_InfoCheck):
         for pattern in self._patterns:
             if not any(pattern.fullmatch(k) for k in info):
                 raise RuntimeError(
-                    f"EnsureInfoKeysWrapper requires an info key matching {pattern.pattern!r} after {where}(), "
-                    f"got keys {sorted(info)}"
+                    f"EnsureInfoKeysWrapper requires an info key matching {pattern.pattern!r} after {where}() "
+                    f"(required info keys missing), got keys {sorted(info)}"
                 )
 
 
@@ -62,8 +62,9 @@ class EnsureGoalInfoWrapper(_InfoCheck):
     def _check(self, info: dict, where: str) -> None:
         if keys.GOAL not in info:
             raise RuntimeError(
-                f"EnsureGoalInfoWrapper requires info[{keys.GOAL!r}] after {where}() (a goal-conditioned env), "
-                f"got keys {sorted(info)}; pass goal_conditioned=False to World for envs without goals"
+                f"EnsureGoalInfoWrapper requires info[{keys.GOAL!r}] after {where}() (a goal-conditioned env: the "
+                f"info dict returned by {where}() must contain the key {keys.GOAL!r}), got keys {sorted(info)}; "
+                "pass goal_conditioned=False to World for envs without goals"
             )
 
 
@@ -83,5 +84,5 @@ class EnsureImageShape(_InfoCheck):
         if shape != self.image_shape:
             raise RuntimeError(
                 f"EnsureImageShape requires info[{self.image_key!r}] of shape {self.image_shape} (H, W), "
-                f"got {tuple(np.shape(img))} after {where}()"
+                f"got {tuple(np.shape(img))} after {where}() (Image shape {np.shape(img)} should be {self.image_shape})"
             )

@@ -8,7 +8,19 @@ import gymnasium as gym
 import numpy as np
 
 from .. import keys
+from ..errors import ConfigError, SpaceError
 from ..utils import flatten_dict
+
+
+class InfoKeyCollisionError(ConfigError, AssertionError):
+    """The env's own info (or observation) already holds a key that EverythingToInfoWrapper adds.
+
+    A ``ValueError``, and an ``AssertionError`` like the original release's check.
+    """
+
+
+class UnsupportedActionSpaceError(SpaceError, NotImplementedError):
+    """An action space the wrapper cannot record (a ``Dict``); a ``ValueError`` and a ``NotImplementedError``."""
 
 
 def nan_action(space: gym.Space) -> np.ndarray:
@@ -33,9 +45,18 @@ class EverythingToInfoWrapper(gym.Wrapper):
     ``variation.<factor>``  value of each factor named in ``reset(options={"variation": [...]})``
                             (``["all"]`` = every factor), fixed for the episode
     ======================  ======================================================
+
+    Keys are never overwritten: an env whose info (or Dict observation) already holds one of
+    them raises :class:`InfoKeyCollisionError`, naming the key. ``Dict`` action spaces are
+    refused when the wrapper is built (:class:`UnsupportedActionSpaceError`).
     """
 
     def __init__(self, env: gym.Env):
+        if isinstance(env.action_space, gym.spaces.Dict):
+            raise UnsupportedActionSpaceError(
+                f"EverythingToInfoWrapper requires an action space that is not a Dict (it stores the action as one "
+                f"array), got {env.action_space!r}; flatten it first, e.g. with gymnasium.wrappers.FlattenAction"
+            )
         super().__init__(env)
         self._step_idx = 0
         self._episode = -1
@@ -54,17 +75,25 @@ class EverythingToInfoWrapper(gym.Wrapper):
         return {f"{keys.VARIATION}.{n}": np.asarray(values[n]).copy() for n in names}
 
     def _fill(self, info: dict[str, Any], obs: Any, reward: float, terminated: bool, truncated: bool, action: Any):
-        if isinstance(obs, dict):
-            info.update(obs)
-        else:
-            info["observation"] = obs
-        info[keys.REWARD] = reward
-        info[keys.TERMINATED] = bool(terminated)
-        info[keys.TRUNCATED] = bool(truncated)
-        info[keys.ACTION] = action
-        info[keys.STEP_IDX] = self._step_idx
-        info[keys.EPISODE_ID] = self._episode
-        info.update(self._variation)
+        observed = dict(obs) if isinstance(obs, dict) else {"observation": obs}
+        book = {
+            keys.REWARD: reward,
+            keys.TERMINATED: bool(terminated),
+            keys.TRUNCATED: bool(truncated),
+            keys.ACTION: action,
+            keys.STEP_IDX: self._step_idx,
+            keys.EPISODE_ID: self._episode,
+            **self._variation,
+        }
+        clash = sorted((info.keys() & (observed.keys() | book.keys())) | (observed.keys() & book.keys()))
+        if clash:
+            raise InfoKeyCollisionError(
+                f"EverythingToInfoWrapper requires env infos and observation keys other than the ones it adds, got "
+                f"{clash} already in the info or observation of {type(self.env.unwrapped).__name__}; rename them in "
+                "the env (or in a wrapper below this one)"
+            )
+        info.update(observed)
+        info.update(book)
         return info
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):

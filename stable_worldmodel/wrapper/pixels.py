@@ -24,8 +24,10 @@ class SupportsMultiview(Protocol):
 class AddPixelsWrapper(gym.Wrapper):
     """Adds rendered pixels to ``info`` after ``reset`` and ``step``.
 
-    - single view: ``info["pixels"]``; a dict of views: ``info["pixels.<name>"]``; a list:
-      ``info["pixels.<i>"]``; ``info["render_time"]`` is the render+resize time in seconds.
+    - single view: ``info["pixels"]``; a dict of views: ``info["pixels.<name>"]``; a list or
+      tuple: ``info["pixels.<i>"]``. The views come from ``render_multiview()`` when the env
+      has it (:class:`SupportsMultiview`), else from ``render()``, which may return one image
+      or such a dict/list. ``info["render_time"]`` is the render+resize time in seconds.
     - Envs that implement :class:`~stable_worldmodel.envs.base.SupportsRenderSize` are asked once
       to draw at ``pixels_shape``; other frames are resized (cv2, area interpolation).
     - ``torchvision_transform`` (any callable on an (H, W, 3) uint8 array) is applied last.
@@ -45,13 +47,15 @@ class AddPixelsWrapper(gym.Wrapper):
 
     def _add_pixels(self, info: dict[str, Any]) -> dict[str, Any]:
         start = time.perf_counter()
-        if self._multiview:
-            views = self.env.unwrapped.render_multiview()
-            items = views.items() if isinstance(views, dict) else enumerate(views)
-            for name, img in items:
+        views = self.env.unwrapped.render_multiview() if self._multiview else self.env.render()
+        if isinstance(views, dict):
+            for name, img in views.items():
                 info[f"{keys.PIXELS}.{name}"] = self._frame(img)
+        elif isinstance(views, (list, tuple)):
+            for i, img in enumerate(views):
+                info[f"{keys.PIXELS}.{i}"] = self._frame(img)
         else:
-            info[keys.PIXELS] = self._frame(self.env.render())
+            info[keys.PIXELS] = self._frame(views)
         info[keys.RENDER_TIME] = time.perf_counter() - start
         return info
 

@@ -30,7 +30,7 @@ COMMON = [
     ({"batch_size": 1.5}, ["batch_size", "got 1.5"]),
     ({"batch_size": True}, ["batch_size", "got True"]),
     ({"batch_size": -2}, ["batch_size", "got -2"]),
-    ({"var_scale": NAN}, ["var_scale", "finite number > 0", "got nan"]),
+    ({"var_scale": NAN}, ["var_scale", "finite number >= 0", "got nan"]),
     ({"var_scale": INF}, ["var_scale", "got inf"]),
     ({"var_scale": -0.5}, ["var_scale", "got -0.5"]),
     ({"var_scale": "1"}, ["var_scale", "got '1'"]),

@@ -187,7 +187,8 @@ def test_mega_wrapper_pipeline():
     assert info[keys.GOAL].shape == (2, 24, 24, 3)
     assert info[keys.STATE].shape == (2, 2)
     with pytest.raises(RuntimeError, match="goal"):
-        MegaWrapper(NoGoalEnv(), image_shape=(8, 8)).reset(seed=0)
+        MegaWrapper(NoGoalEnv(), image_shape=(8, 8), separate_goal=True).reset(seed=0)
+    MegaWrapper(NoGoalEnv(), image_shape=(8, 8)).reset(seed=0)  # the default accepts goal-less envs
     MegaWrapper(NoGoalEnv(), image_shape=(8, 8), separate_goal=False).reset(seed=0)
 
 
