@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import json
 import logging
+import os
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -44,7 +46,16 @@ def episode_seeds(world: World, episodes: int, seed: int | None) -> list[int]:
     return seeds
 
 
-def evaluate(world: World, episodes: int = 10, eval_keys=None, seed: int | None = None, options=None, dump_every: int = -1) -> dict[str, Any]:
+def evaluate(
+    world: World,
+    episodes: int = 10,
+    eval_keys=None,
+    seed: int | None = None,
+    options=None,
+    dump_every: int = -1,
+    video: str | os.PathLike | None = None,
+) -> dict[str, Any]:
+    """The episodic evaluation loop of :meth:`World.evaluate` (see there); ``video``: one MP4 per episode."""
     if isinstance(episodes, bool) or not isinstance(episodes, (int, np.integer)) or episodes < 1:
         raise ConfigError(f"World.evaluate requires episodes to be an integer >= 1, got {episodes!r}")
     if world.policy is None:
@@ -68,12 +79,21 @@ def evaluate(world: World, episodes: int = 10, eval_keys=None, seed: int | None 
     collected: dict[str, list] = {k: [None] * episodes for k in eval_keys}
     slot = np.full(n, -1, np.int64)  # episode index each env is playing (-1: none)
     slot[:first] = np.arange(first)
+    frames: list[list[np.ndarray]] | None = None
+    if video is not None:
+        if keys.PIXELS not in world.infos:
+            raise ConfigError(f"World.evaluate(video=...) requires {keys.PIXELS!r} in the infos, got {sorted(world.infos)}")
+        frames = [[np.asarray(world.infos[keys.PIXELS])[i, -1].copy()] for i in range(n)]
     next_episode = first
     done_count = 0
     bar = _progress(world, episodes, f"evaluate {world.env_name}")
     try:
         while done_count < episodes:
             world.step()
+            if frames is not None:
+                pixels = np.asarray(world.infos[keys.PIXELS])
+                for i in np.flatnonzero(slot >= 0):
+                    frames[i].append(pixels[i, -1].copy())
             finished = np.flatnonzero((world.terminateds | world.truncateds) & (slot >= 0))
             if len(finished) == 0:
                 continue
@@ -84,6 +104,10 @@ def evaluate(world: World, episodes: int = 10, eval_keys=None, seed: int | None 
                 lengths[ep] = int(np.asarray(world.infos[keys.STEP_IDX])[env, -1])
                 for k in eval_keys:
                     collected[k][ep] = np.asarray(world.infos[k][env, -1]).copy()
+                if frames is not None:
+                    from ..data.video import write_mp4
+
+                    write_mp4(Path(video) / f"episode_{ep}.mp4", frames[env])
                 done_count += 1
                 if dump_every > 0 and done_count % dump_every == 0:
                     _dump(world, seed, successes, seeds, finished_mask)
@@ -99,6 +123,10 @@ def evaluate(world: World, episodes: int = 10, eval_keys=None, seed: int | None 
                     slot[env] = -1
             if restart:
                 world.reset_envs(restart, seeds=restart_seeds, options=options)
+                if frames is not None:
+                    pixels = np.asarray(world.infos[keys.PIXELS])
+                    for env in restart:
+                        frames[env] = [pixels[env, -1].copy()]
     finally:
         bar.close()
     results: dict[str, Any] = {

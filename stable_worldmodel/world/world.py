@@ -250,16 +250,54 @@ class World:
         return "\n".join(lines)
 
     # -- loops -----------------------------------------------------------------------------
-    def evaluate(self, episodes: int = 10, eval_keys: list[str] | None = None, seed: int | None = None, options: dict | None = None, dump_every: int = -1) -> dict:
+    def evaluate(
+        self,
+        episodes: int | None = 10,
+        eval_keys: list[str] | None = None,
+        seed: int | None = None,
+        options: dict | None = None,
+        dump_every: int = -1,
+        *,
+        video: str | Path | None = None,
+        reset_mode: str | None = None,
+        dataset: Any = None,
+        episodes_idx: Sequence[int] | None = None,
+        start_steps: Sequence[int] | None = None,
+        goal_offset: int | None = None,
+        eval_budget: int | None = None,
+        callables: list[dict] | None = None,
+    ) -> dict:
         """Run the policy for ``episodes`` episodes; success = ``terminated``, truncation = failure.
 
         Returns ``success_rate`` (percent), ``episode_count``, ``episode_successes`` (bool, one per episode in seed
         order), ``seeds`` (unique; ``seed + k`` for episode k when ``seed`` is given), and for
         each of ``eval_keys`` the value of ``infos[key]`` (last history frame) at the end of each
         episode. ``dump_every > 0`` writes the results so far as JSON to
-        ``<cache>/evaluations/<env>_<seed>.json`` every ``dump_every`` finished episodes.
+        ``<cache>/evaluations/<env>_<seed>.json`` every ``dump_every`` finished episodes;
+        ``video`` writes ``episode_<k>.mp4`` per episode into that folder.
+
+        Upstream 0.1.1's dataset-driven form: ``evaluate(dataset=..., episodes_idx=...,
+        start_steps=..., goal_offset=..., eval_budget=..., callables=...)`` is
+        :meth:`evaluate_from_dataset`. ``reset_mode`` (``"auto"``, or ``"wait"`` where each env
+        plays at most one episode) is accepted as 0.1.1 names it.
         """
-        return _evaluate(self, episodes=episodes, eval_keys=eval_keys, seed=seed, options=options, dump_every=dump_every)
+        if dataset is not None:
+            missing = [k for k, v in (("episodes_idx", episodes_idx), ("start_steps", start_steps), ("goal_offset", goal_offset), ("eval_budget", eval_budget)) if v is None]
+            if missing:
+                raise ConfigError(f"World.evaluate(dataset=...) requires {', '.join(missing)} too")
+            return self.evaluate_from_dataset(
+                dataset, episodes_idx, start_steps, goal_offset, eval_budget, callables=callables,
+                save_video=video is not None, video_path=video if video is not None else "./",
+            )
+        if reset_mode not in (None, "auto", "wait"):
+            raise ConfigError(f"World.evaluate requires reset_mode 'auto', 'wait' or None, got {reset_mode!r}")
+        if episodes is None:
+            episodes = self.num_envs
+        if reset_mode == "wait" and isinstance(episodes, int) and episodes > self.num_envs:
+            raise ConfigError(
+                f"World.evaluate(reset_mode='wait') plays one episode per env: episodes <= num_envs ({self.num_envs}), got {episodes}"
+            )
+        return _evaluate(self, episodes=episodes, eval_keys=eval_keys, seed=seed, options=options, dump_every=dump_every, video=video)
 
     def record_dataset(self, dataset_name: str, episodes: int = 10, seed: int | None = None, cache_dir=None, options: dict | None = None) -> Path:
         """Record ``episodes`` complete episodes into ``<cache_dir>/<dataset_name>.h5`` (see :mod:`.recording`)."""

@@ -290,3 +290,29 @@ def test_evaluate_with_a_seed_repeats_exactly_on_the_same_world_and_policy(polic
     np.testing.assert_array_equal(first[keys.STATE], again[keys.STATE])
     other = world.evaluate(episodes=3, seed=6, eval_keys=[keys.STATE])
     assert not np.array_equal(first[keys.STATE], other[keys.STATE])
+
+
+def test_evaluate_upstream_keywords(tmp_path):
+    world = make(2, max_episode_steps=4)
+    world.set_policy(RandomPolicy(seed=0))
+    res = world.evaluate(episodes=3, seed=1, video=tmp_path / "v")
+    assert res["episode_count"] == 3
+    assert sorted(p.name for p in (tmp_path / "v").iterdir()) == ["episode_0.mp4", "episode_1.mp4", "episode_2.mp4"]
+    assert world.evaluate(episodes=None, seed=1)["episode_count"] == 2  # None: one per env
+    with pytest.raises(ConfigError, match="reset_mode"):
+        world.evaluate(episodes=2, reset_mode="sometimes")
+    with pytest.raises(ConfigError, match="one episode per env"):
+        world.evaluate(episodes=3, reset_mode="wait")
+    with pytest.raises(ConfigError, match="requires episodes_idx, start_steps"):
+        world.evaluate(dataset="x", goal_offset=1, eval_budget=2)
+
+
+def test_evaluate_with_a_dataset_is_evaluate_from_dataset(tmp_path):
+    from stable_worldmodel.envs.toy.env import ToyExpert
+
+    world = make(2, max_episode_steps=40)
+    world.set_policy(ToyExpert())
+    world.record_dataset("toy", episodes=2, seed=3, cache_dir=tmp_path)
+    ds = swm.data.HDF5Dataset("toy", cache_dir=tmp_path)
+    res = world.evaluate(dataset=ds, episodes_idx=[0, 1], start_steps=[0, 1], goal_offset=3, eval_budget=10)
+    assert res["episode_successes"].tolist() == [True, True]
