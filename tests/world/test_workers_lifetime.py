@@ -36,7 +36,7 @@ def alive(pid: int) -> bool:
     return stat.rsplit(")", 1)[1].split()[0] not in ("Z", "X")
 
 
-def wait_gone(pids, timeout: float = 2.0) -> list[int]:
+def wait_gone(pids, timeout: float = 5.0) -> list[int]:  # about 0.1 s when the machine is idle
     """The pids still alive after ``timeout`` seconds."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline and any(alive(p) for p in pids):
@@ -53,6 +53,7 @@ def run_script(tmp_path: Path, body: str, *args: str, name: str = "script.py") -
     path.write_text(textwrap.dedent(body))
     return subprocess.Popen(
         [sys.executable, str(path), *args],
+        stdin=subprocess.PIPE,
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -117,7 +118,7 @@ for world in worlds:
         step_unread(vec, SLOW)  # busy in env.step: only the lifeline thread can notice the parent's death
         continue
     step_unread(vec, 0.0)  # the workers make shared memory that this process never maps
-    deadline = time.monotonic() + 5
+    deadline = time.monotonic() + 15
     while time.monotonic() < deadline:
         names = [n for n in os.listdir("/dev/shm") if n.startswith(vec._pool.shm_prefix)]
         if len(names) == 4:  # pixels and goal of each worker's step
@@ -126,6 +127,7 @@ for world in worlds:
     out["names"] += names
 print(json.dumps(out), flush=True)
 if how == "os._exit":
+    sys.stdin.readline()  # the test has seen the workers alive
     os._exit(3)
 time.sleep(60)
 """
@@ -148,7 +150,10 @@ def test_workers_and_shared_memory_go_with_their_parent(tmp_path, how, where):
         assert len(info["names"]) == (0 if where == "group" else 4)  # unread blocks, before the parent dies
         if where == "group":
             os.killpg(proc.pid, signal.SIGKILL)
-        elif how != "os._exit":
+        elif how == "os._exit":
+            proc.stdin.write("exit now\n")
+            proc.stdin.flush()
+        else:
             proc.send_signal(getattr(signal, how))
         proc.wait(timeout=10)
         assert wait_gone(info["pids"]) == []
@@ -200,7 +205,7 @@ def test_close_removes_the_blocks_a_killed_worker_left_unread():
     vec = world.envs
     pid, prefix = vec._procs[1].pid, vec._pool.shm_prefix
     vec._pool.send(1, ("step", ([np.zeros(2, np.float32)],)))  # its reply is never read
-    deadline = time.monotonic() + 5
+    deadline = time.monotonic() + 15
     while len(shm_names(f"{prefix}1_")) < 2 and time.monotonic() < deadline:
         time.sleep(0.01)
     assert len(shm_names(f"{prefix}1_")) == 2  # pixels and goal of the unread step
