@@ -15,6 +15,7 @@ from .. import keys
 from ..envs._registry import check_env_id
 from ..errors import ConfigError
 from ..wrapper import MegaWrapper
+from ..wrapper.mega import GOAL_IF_ANY
 from ..wrapper._image import check_shape
 from .checks import check_env_kwargs, check_reset_options, check_seed, check_seeds
 from .evaluate import evaluate as _evaluate
@@ -35,23 +36,34 @@ def make_world_env(
     extra_wrappers: Sequence[Callable] | None,
     env_kwargs: dict[str, Any],
     goal_shape: tuple[int, int] | None = None,
+    pre_wrappers: Sequence[Callable] | None = None,
+    add_pixels: bool = True,
 ) -> gym.Env:
-    """One env as World uses it: ``gym.make`` + ``extra_wrappers`` + :class:`MegaWrapper`."""
+    """One env as World uses it: ``gym.make`` + ``pre_wrappers`` + :class:`MegaWrapper` + ``extra_wrappers``.
+
+    As in 0.0.3 (and 0.1.1), ``extra_wrappers`` wrap the standardised env (after MegaWrapper);
+    0.1.1's ``pre_wrappers`` wrap the raw env, before it.
+    """
     kwargs = dict(env_kwargs)
-    kwargs.setdefault("render_mode", "rgb_array")
+    if add_pixels:
+        kwargs.setdefault("render_mode", "rgb_array")
     env = gym.make(env_name, max_episode_steps=max_episode_steps, disable_env_checker=True, **kwargs)
-    for wrapper in extra_wrappers or ():
+    for wrapper in pre_wrappers or ():
         env = wrapper(env)
-    return MegaWrapper(
+    env = MegaWrapper(
         env,
         image_shape=image_shape,
         pixels_transform=image_transform,
         goal_transform=goal_transform,
-        separate_goal=goal_conditioned,
+        separate_goal=GOAL_IF_ANY if goal_conditioned else False,  # goal-less envs work, as in 0.0.3
         history_size=history_size,
         frame_skip=frame_skip,
         goal_shape=goal_shape,
+        add_pixels=add_pixels,
     )
+    for wrapper in extra_wrappers or ():
+        env = wrapper(env)
+    return env
 
 
 def _positive_int(name: str, value: Any) -> int:
@@ -78,7 +90,7 @@ class World:
         self,
         env_name: str,
         num_envs: int,
-        image_shape: tuple[int, int],
+        image_shape: tuple[int, int] | None = None,
         goal_transform: Callable[[Any], Any] | None = None,
         image_transform: Callable[[Any], Any] | None = None,
         seed: int = 2349867,
@@ -93,7 +105,12 @@ class World:
         check_env_id(env_name)
         self.env_name = env_name
         n = _positive_int("num_envs", num_envs)
-        self.image_shape = check_shape("World image_shape", image_shape)
+        add_pixels = kwargs.pop("add_pixels", True)  # upstream 0.1.1: False for envs without pixels
+        if not isinstance(add_pixels, bool):
+            raise ConfigError(f"World requires add_pixels to be a bool, got {add_pixels!r}")
+        if image_shape is None and add_pixels:
+            raise ConfigError("World requires image_shape=(H, W) for the pixels it adds (or add_pixels=False)")
+        self.image_shape = check_shape("World image_shape", image_shape if image_shape is not None else (1, 1))
         self.history_size = _positive_int("history_size", history_size)
         self.frame_skip = _positive_int("frame_skip", frame_skip)
         self.max_episode_steps = _positive_int("max_episode_steps", max_episode_steps)
@@ -101,6 +118,11 @@ class World:
         self.verbose = verbose
         self.goal_conditioned = goal_conditioned
         mode = kwargs.pop("vectorization_mode", "auto")
+        # upstream 0.1.1's World arguments: never passed on to the env constructor
+        pre_wrappers = list(kwargs.pop("pre_wrappers", None) or [])
+        resample = kwargs.pop("image_resample", None)
+        if resample is not None:
+            logger.info("World(image_resample=%r): images are resized with OpenCV's area/linear filters", resample)
         # seed 000's World took goal_shape; keep accepting it (goal images at another size)
         goal_shape = kwargs.pop("goal_shape", None)
         goal_shape = check_shape("World goal_shape", goal_shape) if goal_shape is not None else None
@@ -118,6 +140,8 @@ class World:
             list(extra_wrappers or []),
             kwargs,
             goal_shape,
+            pre_wrappers,
+            add_pixels,
         )
         self._vec = VecEnv(factory, n, mode=mode)
         self.envs = self._vec

@@ -59,9 +59,11 @@ class MegaWrapper(gym.Wrapper):
         history_size: int = 1,
         frame_skip: int = 1,
         goal_shape: tuple[int, int] | None = None,
+        add_pixels: bool = True,
     ):
-        required = [PIXELS_PATTERN, *(required_keys or [])]
-        env = AddPixelsWrapper(env, image_shape, pixels_transform)
+        required = [PIXELS_PATTERN, *(required_keys or [])] if add_pixels else list(required_keys or [])
+        if add_pixels:  # False: envs without pixels (upstream 0.1.1's World(add_pixels=False))
+            env = AddPixelsWrapper(env, image_shape, pixels_transform)
         env = EverythingToInfoWrapper(env)
         env = EnsureInfoKeysWrapper(env, required)
         if separate_goal is not GOAL_IF_ANY:

@@ -316,3 +316,58 @@ def test_evaluate_with_a_dataset_is_evaluate_from_dataset(tmp_path):
     ds = swm.data.HDF5Dataset("toy", cache_dir=tmp_path)
     res = world.evaluate(dataset=ds, episodes_idx=[0, 1], start_steps=[0, 1], goal_offset=3, eval_budget=10)
     assert res["episode_successes"].tolist() == [True, True]
+
+
+def test_upstream_world_arguments_do_not_reach_the_env():
+    calls = []
+
+    def pre(env):
+        calls.append(("pre", type(env).__name__))
+        return env
+
+    def extra(env):
+        calls.append(("extra", type(env).__name__))
+        return env
+
+    world = swm.World(TOY, num_envs=1, image_shape=(8, 8), pre_wrappers=[pre], extra_wrappers=[extra],
+                      image_resample="nearest", vectorization_mode="sync", verbose=0)
+    assert [c[0] for c in calls] == ["pre", "extra"] and calls[1][1] == "MegaWrapper"  # extra wraps MegaWrapper, as 0.0.3
+    world.set_policy(RandomPolicy(seed=0))
+    world.reset(seed=0)
+    bare = swm.World(TOY, num_envs=1, add_pixels=False, vectorization_mode="sync", verbose=0)
+    bare.set_policy(RandomPolicy(seed=0))
+    bare.reset(seed=0)
+    bare.step()
+    assert keys.PIXELS not in bare.infos and keys.STATE in bare.infos
+    with pytest.raises(ConfigError, match="requires image_shape"):
+        swm.World(TOY, num_envs=1)
+
+
+class _GoalLess(__import__("gymnasium").Env):
+    """An env with no goal at all (like most Gymnasium envs)."""
+
+    def __init__(self, render_mode=None):
+        import gymnasium as gym
+
+        self.observation_space = gym.spaces.Box(-1, 1, (2,), np.float32)
+        self.action_space = gym.spaces.Box(-1, 1, (2,), np.float32)
+        self.render_mode = render_mode
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        return np.zeros(2, np.float32), {}
+
+    def step(self, action):
+        return np.zeros(2, np.float32), 0.0, False, False, {}
+
+    def render(self):
+        return np.zeros((8, 8, 3), np.uint8)
+
+
+def test_goal_less_env_works_with_the_default_goal_conditioned():
+    swm.envs.register(id="swm/CompatGoalLess-v0", entry_point=_GoalLess)
+    world = swm.World("swm/CompatGoalLess-v0", num_envs=1, image_shape=(8, 8), vectorization_mode="sync", verbose=0)
+    world.set_policy(RandomPolicy(seed=0))
+    world.reset(seed=0)
+    world.step()
+    assert keys.GOAL not in world.infos and world.infos[keys.PIXELS].shape == (1, 1, 8, 8, 3)
