@@ -38,6 +38,20 @@ _ATTRS: dict[str, str] = {
     "is_image": "info",
     "repair": "_superblock",
     "record_video_from_dataset": "video",
+    "load_dataset": "utils",
+    "column_normalizer": "utils",
+    "FolderWriter": "folder",
+    "VideoWriter": "video_dataset",
+    "FORMATS": "format",
+    "Format": "format",
+    "register_format": "format",
+    "get_format": "format",
+    "detect_format": "format",
+    "list_formats": "format",
+    "IdentityScaler": "normalization",
+    "ZScoreScaler": "normalization",
+    "PercentileScaler": "normalization",
+    "get_scaler": "normalization",
 }
 
 __all__ = ["get_cache_dir", *_ATTRS]
@@ -54,7 +68,10 @@ if TYPE_CHECKING:  # pragma: no cover
     from ._superblock import repair  # noqa: F401
     from .compose import ConcatDataset, GoalDataset, MergeDataset  # noqa: F401
     from .dataset import Dataset  # noqa: F401
-    from .folder import FolderDataset, ImageDataset, write_folder_dataset  # noqa: F401
+    from .folder import FolderDataset, FolderWriter, ImageDataset, write_folder_dataset  # noqa: F401
+    from .format import FORMATS, Format, detect_format, get_format, list_formats, register_format  # noqa: F401
+    from .normalization import IdentityScaler, PercentileScaler, ZScoreScaler, get_scaler  # noqa: F401
+    from .utils import column_normalizer, load_dataset  # noqa: F401
     from .hdf5 import HDF5Dataset  # noqa: F401
     from .info import (  # noqa: F401
         SpaceInfo,
@@ -70,5 +87,5 @@ if TYPE_CHECKING:  # pragma: no cover
         world_info,
     )
     from .video import record_video_from_dataset  # noqa: F401
-    from .video_dataset import VideoDataset, write_video_dataset  # noqa: F401
+    from .video_dataset import VideoDataset, VideoWriter, write_video_dataset  # noqa: F401
     from .writer import HDF5Writer  # noqa: F401

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from .. import keys
-from ..errors import DatasetFormatError
+from ..errors import ConfigError, DatasetFormatError
 from . import _superblock
 from .dataset import Dataset
 from .utils import resolve_dataset_path
@@ -86,6 +86,20 @@ def _open_swmr(path: str | os.PathLike, locking: bool | None):
     return h5py.File(fid)
 
 
+@functools.cache
+def _register_filters() -> bool:
+    """Import ``hdf5plugin`` where it is installed: it registers the compression filters (Blosc,
+    LZ4, Zstd...) that 0.0.3 recordings use, so their image columns open with no extra step."""
+    from .._optional import is_available
+
+    if not is_available("hdf5plugin"):
+        logger.debug("hdf5plugin is not installed: Blosc-compressed columns cannot be read")
+        return False
+    import hdf5plugin  # noqa: F401
+
+    return True
+
+
 def open_h5(path: str | os.PathLike):
     """Open ``path`` read-only: as a SWMR reader first, plainly as a fallback.
 
@@ -98,6 +112,7 @@ def open_h5(path: str | os.PathLike):
     """
     import h5py
 
+    _register_filters()
     if _superblock.needs_repair(path):
         try:
             _superblock.repair(path)
@@ -125,6 +140,7 @@ class HDF5Dataset(Dataset):
 
     Args:
         name: dataset name in ``cache_dir`` (default :func:`get_cache_dir`) or a path to an ``.h5`` file.
+        path: the ``.h5`` file itself (0.1.1), instead of ``name``.
         frameskip: rows between two sampled frames; ``action`` groups the ``frameskip`` actions.
         num_steps: frames per sample (T).
         transform: callable applied to each item dict.
@@ -142,7 +158,7 @@ class HDF5Dataset(Dataset):
 
     def __init__(
         self,
-        name: str | os.PathLike,
+        name: str | os.PathLike | None = None,
         frameskip: int = 1,
         num_steps: int = 1,
         transform: Callable[[dict], dict] | None = None,
@@ -151,9 +167,12 @@ class HDF5Dataset(Dataset):
         cache_dir: str | os.PathLike | None = None,
         *,
         preload: bool | None = None,
+        path: str | os.PathLike | None = None,
     ):
         super().__init__(frameskip=frameskip, num_steps=num_steps, transform=transform, keys_to_load=keys_to_load)
-        self.path = resolve_dataset_path(name, cache_dir)
+        if (name is None) == (path is None):
+            raise ConfigError(f"HDF5Dataset requires a dataset name or path=, got {'neither' if name is None else 'both'}")
+        self.path = Path(path).expanduser() if path is not None else resolve_dataset_path(name, cache_dir)
         check_file(self.path, "HDF5Dataset")
         self.name = self.path.stem
         self._file = None
@@ -224,6 +243,14 @@ class HDF5Dataset(Dataset):
         return max(chunk, (BLOCK_BYTES // row_bytes) // chunk * chunk)
 
     # -- Dataset interface --------------------------------------------------------------------
+    @property
+    def h5_path(self) -> Path:
+        """The ``.h5`` file (0.0.3's name of :attr:`path`)."""
+        return self.path
+
+    def row_shape(self, col: str) -> tuple[int, ...]:
+        return self.column_shape(col)[0]
+
     def column_shape(self, col: str) -> tuple[tuple[int, ...], np.dtype]:
         """Per-row shape and dtype of ``col``."""
         self.check_keys([col])
@@ -260,6 +287,11 @@ class HDF5Dataset(Dataset):
         try:
             return self._handle()[col][start:stop]
         except OSError as exc:
+            if any(t in str(exc).lower() for t in ("plugin", "not registered", "required filter")):  # an unknown compression filter
+                raise DatasetFormatError(
+                    f"HDF5Dataset requires the compression filter of column {col!r} of {self.path}, got: {exc}; "
+                    "install it with: pip install hdf5plugin"
+                ) from exc
             raise DatasetFormatError(f"HDF5Dataset could not read rows {start}:{stop} of column {col!r} of {self.path} (damaged?): {exc}") from exc
 
     @property

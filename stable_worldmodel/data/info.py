@@ -11,9 +11,8 @@ from typing import Any, TypedDict
 
 import numpy as np
 
-from .. import keys
 from ..errors import ConfigError, did_you_mean, unknown_name
-from .utils import get_cache_dir
+from .utils import DATASETS_SUBFOLDER, get_cache_dir
 
 logger = logging.getLogger(__name__)
 
@@ -55,13 +54,25 @@ def is_image(x: Any) -> bool:
 
 
 # -- datasets ----------------------------------------------------------------------------------
-def list_datasets() -> list[str]:
-    """Names of the datasets in the cache: ``<name>.h5`` files and folder/video directories."""
-    from .folder import META
+def _dataset_dirs(root: Path) -> list[Path]:
+    """Folders directly in the cache (and in its ``datasets/``) that a registered format recognises."""
+    from .format import detect_format
 
+    found = []
+    for base in (root, root / DATASETS_SUBFOLDER):
+        if not base.is_dir():
+            continue
+        for path in sorted(base.iterdir()):
+            if path.is_dir() and not _hidden(path, root) and path != root / DATASETS_SUBFOLDER and detect_format(path) is not None:
+                found.append(path)
+    return found
+
+
+def list_datasets() -> list[str]:
+    """Names of the datasets in the cache: ``<name>.h5`` files and dataset folders of any registered format."""
     root = get_cache_dir()
     names = {p.relative_to(root).with_suffix("").as_posix() for p in root.rglob("*.h5") if p.is_file() and not _hidden(p, root)}
-    names |= {p.parent.name for p in root.glob(f"*/{META}")}
+    names |= {p.relative_to(root).as_posix() for p in _dataset_dirs(root)}
     return sorted(names)
 
 
@@ -92,58 +103,37 @@ def _hidden(path: Path, root: Path) -> bool:
     return any(p.startswith(".") for p in parts) or parts[0] == "checkpoints"
 
 
+def _candidates(root: Path, name: str) -> tuple[Path, ...]:
+    """Where dataset ``name`` may be: ``<name>.h5`` or ``<name>/``, in the cache or its ``datasets/``."""
+    return (root / f"{name}.h5", root / name, root / DATASETS_SUBFOLDER / f"{name}.h5", root / DATASETS_SUBFOLDER / name)
+
+
 def _dataset_path(name: str) -> Path:
     root = get_cache_dir()
-    for path in (root / f"{name}.h5", root / name):
+    for path in _candidates(root, name):
         if path.exists():
             return path
-    raise ConfigError(f"dataset_info requires a dataset in {root}, got {name!r}.{did_you_mean(name, list_datasets())}")
+    raise ConfigError(f"dataset_info requires a dataset in {root}, got {name!r} (not found).{did_you_mean(name, list_datasets())}")
 
 
 def dataset_info(name: str) -> dict[str, Any]:
     """Metadata of cached dataset ``name``: name, path, format, num_episodes, num_steps,
-    columns, obs_shape, action_shape, goal_shape, variation, episode lengths summary."""
+    columns, obs_shape, action_shape, goal_shape, variation, episode lengths summary
+    (the ``summary`` of its :class:`~.format.Format`)."""
+    from ..errors import DatasetFormatError
+    from .format import detect_format, list_formats
+
     path = _dataset_path(name)
-    if path.suffix == ".h5":
-        from .hdf5 import HDF5Dataset
-
-        ds = HDF5Dataset(path, preload=False)  # a few rows are read: no need to decode it all
-        fmt = "hdf5"
-    else:
-        from .folder import FolderDataset
-        from .video_dataset import VideoDataset
-
-        fmt = "video" if (path / "columns.npz").exists() and any(path.glob("*/episode_*.mp4")) else "folder"
-        ds = VideoDataset(path) if fmt == "video" else FolderDataset(path)
-
-    def shape(col: str) -> tuple[int, ...] | None:
-        return tuple(ds.get_row_data(0)[col].shape) if col in ds.column_names and ds.num_rows else None
-
-    variations = sorted(c[len(keys.VARIATION) + 1 :] for c in ds.column_names if c.startswith(keys.VARIATION + "."))
-    lengths = np.asarray(ds.lengths)
-    return {
-        "name": name,
-        "path": str(path),
-        "format": fmt,
-        "num_episodes": int(ds.num_episodes),
-        "num_steps": int(ds.num_rows),
-        "columns": ds.column_names,
-        "obs_shape": shape(keys.PIXELS),
-        "action_shape": shape(keys.ACTION),
-        "goal_shape": shape(keys.GOAL),
-        "episode_length": {
-            "min": int(lengths.min()) if lengths.size else 0,
-            "max": int(lengths.max()) if lengths.size else 0,
-            "mean": float(lengths.mean()) if lengths.size else 0.0,
-        },
-        "variation": {"has_variation": bool(variations), "names": variations},
-    }
+    fmt = detect_format(path)
+    if fmt is None:
+        raise DatasetFormatError(f"dataset_info requires a dataset in a registered format ({', '.join(list_formats())}), got {str(path)!r}")
+    return {"name": name, **fmt.summary(path)}
 
 
 def delete_dataset(name: str) -> Path:
     """Delete cached dataset ``name`` (its ``.h5`` file or directory); returns the removed path."""
     root = get_cache_dir()
-    for path in (root / f"{name}.h5", root / name):
+    for path in _candidates(root, name):
         if path.is_file():
             path.unlink()
             path.with_name(f".{path.name}.partial").unlink(missing_ok=True)

@@ -6,10 +6,11 @@ import os
 from pathlib import Path
 from typing import Any
 
-__all__ = ["dataset_file", "get_cache_dir", "resolve_dataset_path"]
+__all__ = ["column_normalizer", "dataset_file", "get_cache_dir", "load_dataset", "resolve_dataset_dir", "resolve_dataset_path"]
 
 ENV_VAR = "STABLEWM_HOME"
 DEFAULT_DIRNAME = ".stable_worldmodel"
+DATASETS_SUBFOLDER = "datasets"  # where 0.1.1 keeps datasets inside the cache
 
 
 def _usable_dir(path: Path, what: str) -> Path:
@@ -27,30 +28,71 @@ def _usable_dir(path: Path, what: str) -> Path:
     return path
 
 
-def get_cache_dir() -> Path:
-    """Return the cache directory: ``$STABLEWM_HOME`` or ``~/.stable_worldmodel``.
+def get_cache_dir(
+    cache_dir: str | os.PathLike | None = None,
+    sub_folder: str | None = None,
+    *,
+    override_root: str | os.PathLike | None = None,
+) -> Path:
+    """Return the cache directory: ``cache_dir``, else ``$STABLEWM_HOME``, else ``~/.stable_worldmodel``;
+    with ``sub_folder`` (``"datasets"``), that folder inside it.
 
-    The variable is read at call time (never frozen at import) and the directory is
-    created only when it does not exist yet. A file, or a folder that cannot be created or
-    written, is a :class:`~stable_worldmodel.errors.ConfigError`.
+    ``override_root`` is 0.1.1's name of ``cache_dir``. The variable is read at call time
+    (never frozen at import) and the folder is created only when it does not exist yet. A
+    file, or a folder that cannot be created or written, is a
+    :class:`~stable_worldmodel.errors.ConfigError`.
     """
-    root = os.environ.get(ENV_VAR)
-    if root:
-        return _usable_dir(Path(root).expanduser(), f"the cache folder (${ENV_VAR})")
-    return _usable_dir(Path.home() / DEFAULT_DIRNAME, "the cache folder (~/.stable_worldmodel)")
+    from ..errors import ConfigError
+
+    if override_root is not None:
+        if cache_dir is not None:
+            raise ConfigError(f"get_cache_dir requires cache_dir or override_root (the same thing), got both: {cache_dir!r} and {override_root!r}")
+        cache_dir = override_root
+    if cache_dir is not None:
+        root = _usable_dir(Path(cache_dir).expanduser(), "get_cache_dir(cache_dir=...)")
+    elif os.environ.get(ENV_VAR):
+        root = _usable_dir(Path(os.environ[ENV_VAR]).expanduser(), f"the cache folder (${ENV_VAR})")
+    else:
+        root = _usable_dir(Path.home() / DEFAULT_DIRNAME, "the cache folder (~/.stable_worldmodel)")
+    if sub_folder is None:
+        return root
+    sub = Path(str(sub_folder))
+    if not str(sub_folder).strip() or sub.is_absolute() or ".." in sub.parts:
+        raise ConfigError(f"get_cache_dir requires sub_folder to be a folder name inside the cache such as 'datasets', got {sub_folder!r}")
+    return _usable_dir(root / sub, f"the cache sub-folder {str(sub_folder)!r}")
+
+
+def _root(cache_dir: str | os.PathLike | None) -> Path:
+    return Path(cache_dir).expanduser() if cache_dir is not None else get_cache_dir()
 
 
 def resolve_dataset_path(name: str | os.PathLike, cache_dir: str | os.PathLike | None = None, suffix: str = ".h5") -> Path:
     """Map a dataset name to ``<cache_dir or get_cache_dir()>/<name><suffix>``.
 
     ``name`` is taken as a path when it ends with ``suffix`` or is an existing file; names
-    with folders (``"pusht/shard_0"``) stay under the cache folder.
+    with folders (``"pusht/shard_0"``) stay under the cache folder. A name found only in
+    the ``datasets`` sub-folder (where 0.1.1 keeps them) resolves there.
     """
     path = Path(name).expanduser()
     if str(name).endswith(suffix) or path.is_file():
         return path
-    root = Path(cache_dir).expanduser() if cache_dir is not None else get_cache_dir()
-    return root / f"{name}{suffix}"
+    root = _root(cache_dir)
+    found = root / f"{name}{suffix}"
+    in_sub = root / DATASETS_SUBFOLDER / f"{name}{suffix}"
+    return in_sub if not found.exists() and in_sub.exists() else found
+
+
+def resolve_dataset_dir(name: str | os.PathLike, cache_dir: str | os.PathLike | None = None) -> Path:
+    """``name`` as a directory path when it exists or is absolute, else ``<cache_dir>/<name>``
+    (or ``<cache_dir>/datasets/<name>`` when only that one exists)."""
+    path = Path(name).expanduser()
+    if path.is_dir() or path.is_absolute():
+        return path
+    root = _root(cache_dir)
+    for candidate in (root / str(name), root / DATASETS_SUBFOLDER / str(name)):
+        if candidate.exists():
+            return candidate
+    return path if len(path.parts) > 1 else root / str(name)
 
 
 def dataset_file(name: Any, cache_dir: str | os.PathLike | None = None, suffix: str = ".h5") -> Path:
@@ -81,3 +123,86 @@ def dataset_file(name: Any, cache_dir: str | os.PathLike | None = None, suffix: 
     where = "cache_dir" if cache_dir is not None else "the cache folder"
     root = _usable_dir(Path(cache_dir).expanduser(), where) if cache_dir is not None else get_cache_dir()
     return root / f"{text}{suffix}"
+
+
+def _find_dataset(name: str, cache_dir: str | os.PathLike | None) -> Path:
+    """The existing file or folder that ``name`` names: a path, or a name in the cache folder
+    (``<name>``, ``<name>.h5``, and the same inside ``datasets/``, where 0.1.1 keeps them)."""
+    from ..errors import did_you_mean
+
+    path = Path(name).expanduser()
+    if path.is_absolute() or path.exists():
+        if path.exists():
+            return path
+        raise FileNotFoundError(f"load_dataset requires an existing dataset, got {name!r}: the path does not exist")
+    root = _root(cache_dir)
+    candidates = [root / name, root / f"{name}.h5", root / DATASETS_SUBFOLDER / name, root / DATASETS_SUBFOLDER / f"{name}.h5"]
+    for candidate in candidates:
+        if candidate.exists():
+            return candidate
+    from .info import list_datasets
+
+    known = list_datasets() if cache_dir is None else []
+    hub = " Downloading from the Hugging Face Hub is not supported: download it into that folder first." if "/" in name else ""
+    raise FileNotFoundError(
+        f"load_dataset requires an existing dataset, got {name!r}: it does not exist in {root} "
+        f"(looked for {', '.join(str(c.relative_to(root)) for c in candidates)}).{did_you_mean(name, known)}{hub}"
+    )
+
+
+def load_dataset(
+    name: str | os.PathLike,
+    cache_dir: str | os.PathLike | None = None,
+    format: str | None = None,
+    *,
+    num_steps: int = 1,
+    frameskip: int = 1,
+    keys_to_load: Any = None,
+    keys_to_cache: Any = None,
+    transform: Any = None,
+    **kwargs: Any,
+) -> Any:
+    """Open dataset ``name`` with the reader of its format (as 0.1.1): a path, or a name in
+    ``cache_dir`` (default :func:`get_cache_dir`; ``datasets/`` inside it is searched too).
+
+    The format is detected (:func:`~stable_worldmodel.data.format.detect_format`) unless
+    ``format`` names one. The other arguments go to the reader; ``keys_to_cache`` only
+    where the reader takes it (HDF5). Returns the reader, e.g. an
+    :class:`~stable_worldmodel.data.HDF5Dataset`.
+    """
+    from ..errors import ConfigError, DatasetFormatError
+    from .format import detect_format, get_format, list_formats
+
+    text = os.fspath(name) if isinstance(name, (str, os.PathLike)) else None
+    if not isinstance(text, str) or not text.strip():
+        raise ConfigError(f"load_dataset requires a dataset name or path, got {name!r}")
+    if "://" in text:
+        raise ConfigError(f"load_dataset requires a local dataset, got the URL {text!r}: no registered format ({', '.join(list_formats())}) reads URLs")
+    path = _find_dataset(text, cache_dir)
+    if path.is_dir() and format is None and detect_format(path) is None:
+        files = sorted(path.glob("*.h5")) + sorted(path.glob("*.hdf5"))
+        if len(files) == 1:  # a folder holding one HDF5 file (0.1.1's cache layout)
+            path = files[0]
+    fmt = get_format(format) if format is not None else detect_format(path)
+    if fmt is None:
+        raise DatasetFormatError(
+            f"load_dataset requires a dataset in a registered format ({', '.join(list_formats())}), got {str(path)!r}, "
+            "which none of them recognises; pass format= to force one"
+        )
+    options = dict(num_steps=num_steps, frameskip=frameskip, keys_to_load=keys_to_load, transform=transform, **kwargs)
+    if keys_to_cache is not None:
+        options["keys_to_cache"] = keys_to_cache
+    return fmt.open_reader(path, **options)
+
+
+def column_normalizer(dataset: Any, source: str, target: str, method: str = "zscore") -> Any:
+    """A picklable item transform that writes ``item[target] = scaler(item[source])``, with a
+    scaler (``"zscore"``, ``"percentile"`` or ``"none"``) fitted on ``dataset.get_col_data(source)``."""
+    from .normalization import ColumnTransform, get_scaler
+
+    scaler = get_scaler(method)
+    if method != "none":
+        import numpy as np
+
+        scaler.fit(np.asarray(dataset.get_col_data(source)))
+    return ColumnTransform(scaler, source=source, target=target)

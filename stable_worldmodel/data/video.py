@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from .. import keys
-from ..errors import ConfigError
+from ..errors import ConfigError, UnknownNameError
 
 logger = logging.getLogger(__name__)
 
@@ -93,27 +93,28 @@ def record_video_from_dataset(
 ) -> list[Path]:
     """Write ``<video_path>/episode_<idx>.mp4`` for each episode of ``dataset``.
 
-    ``dataset`` is a :class:`~.dataset.Dataset` or the name of an HDF5 dataset. The views named
-    by ``viewname`` are placed side by side; a ``goal`` column (when not already a view) goes
+    ``dataset`` is any dataset with ``column_names`` and ``load_episode`` (images ``(L, C, H, W)``
+    or ``(L, H, W, C)``), or the name of a dataset in ``cache_dir``. The views named by
+    ``viewname`` are placed side by side; a ``goal`` column (when not already a view) goes
     below them. At most ``max_steps`` frames per episode. Returns the written paths.
     """
     if isinstance(dataset, (str, os.PathLike)):
-        from .hdf5 import HDF5Dataset
+        from .utils import load_dataset
 
-        dataset = HDF5Dataset(dataset, cache_dir=cache_dir, preload=False)  # reads a few episodes
+        dataset = load_dataset(dataset, cache_dir=cache_dir)
     views = [viewname] if isinstance(viewname, str) else list(viewname)
-    dataset.check_keys(views)
-    below = [keys.GOAL] if keys.GOAL in dataset.column_names and keys.GOAL not in views else []
+    columns = list(dataset.column_names)
+    missing = [v for v in views if v not in columns]
+    if missing:
+        raise UnknownNameError(f"record_video_from_dataset view {missing[0]!r} not found in the dataset columns {columns}")
+    below = [keys.GOAL] if keys.GOAL in columns and keys.GOAL not in views else []
     out = []
     for ep in np.atleast_1d(episode_idx).tolist():
-        if not -dataset.num_episodes <= ep < dataset.num_episodes:
-            raise IndexError(f"record_video_from_dataset episode {ep} out of range for {dataset.num_episodes} episodes")
-        start = int(dataset.offsets[ep])
-        stop = start + min(int(dataset.lengths[ep]), int(max_steps))
-        top = [dataset._read(v, start, stop) for v in views]
-        bottom = [dataset._read(v, start, stop) for v in below]
-        frames = (
-            vstack_frames([hstack_frames([t[i] for t in top]), *[b[i] for b in bottom]]) for i in range(stop - start)
+        steps = dataset.load_episode(int(ep))
+        frames = {k: np.asarray(steps[k])[: int(max_steps)] for k in views + below}
+        n = min(len(v) for v in frames.values())
+        rows = (
+            vstack_frames([hstack_frames([frames[v][i] for v in views]), *[frames[b][i] for b in below]]) for i in range(n)
         )
-        out.append(write_mp4(Path(video_path) / f"episode_{ep}.mp4", frames, fps=fps))
+        out.append(write_mp4(Path(video_path) / f"episode_{ep}.mp4", rows, fps=fps))
     return out

@@ -1,104 +1,120 @@
-"""``VideoDataset``: numeric columns in one ``.npz``, one MP4 per episode and image column.
+"""``VideoDataset``: numeric columns in ``.npz`` files, one MP4 per episode and media column.
 
-Layout::
-
-    <root>/
-      meta.json                  {"format": "video", "images": {"pixels": [H, W, C]}, "fps": 30}
-      columns.npz                numeric columns (N, ...) plus ep_len and ep_offset
-      pixels/episode_000004.mp4  H.264 video of episode 4 of column ``pixels``
-
-Decoding uses PyAV (``pip install "stable-worldmodel[video]"``), or decord when installed and
-``decoder="decord"``. The last decoded episodes are kept in memory. H.264 is lossy.
+Layouts in :mod:`._layout` (released: ``<key>/ep_{e}.mp4``; our earlier one:
+``<key>/episode_{e:06d}.mp4`` next to ``meta.json``). Decoding uses PyAV
+(``pip install "stable-worldmodel[video]"``), or decord when ``decoder="decord"`` (the
+default, ``None``, takes PyAV when installed, else decord). The last decoded episodes are kept
+in memory. H.264 is lossy.
 """
 
 from __future__ import annotations
 
+import json
 import os
 from collections import OrderedDict
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from .._optional import require
-from ..errors import ConfigError
+from .._optional import is_available, require
+from ..errors import ConfigError, DatasetFormatError
+from ._layout import FRAMES_FILE
 from .dataset import Dataset
-from .folder import _DirectoryDataset, split_columns, write_meta
+from .folder import FolderDataset, FolderWriter, episodes_of
 from .video import write_mp4
 
 EPISODES_IN_MEMORY = 4
+DECODERS = ("av", "decord")
 
 
-class VideoDataset(_DirectoryDataset):
-    """Windows of a video dataset (see the module docstring); arguments as :class:`HDF5Dataset`."""
+def decode_video(path: Path, decoder: str) -> np.ndarray:
+    """Every frame of the video at ``path`` as ``(T, H, W, 3)`` uint8."""
+    if not path.is_file():
+        raise FileNotFoundError(f"VideoDataset requires the video {str(path)!r}, which does not exist")
+    if decoder == "decord":
+        decord = require("decord", extra="video", purpose="VideoDataset(decoder='decord')")
+        reader = decord.VideoReader(str(path), num_threads=1)
+        frames = reader.get_batch(list(range(len(reader))))
+        return np.asarray(frames.asnumpy() if hasattr(frames, "asnumpy") else frames.numpy())  # decord's torch bridge
+    av = require("av", extra="video", purpose="VideoDataset")
+    with av.open(str(path)) as container:
+        return np.stack([f.to_ndarray(format="rgb24") for f in container.decode(video=0)])
 
-    kind = "video"
 
-    def __init__(
-        self,
-        name: str | os.PathLike,
-        frameskip: int = 1,
-        num_steps: int = 1,
-        transform: Callable[[dict], dict] | None = None,
-        keys_to_load: Sequence[str] | None = None,
-        cache_dir: str | os.PathLike | None = None,
-        decoder: str = "av",
-    ):
-        if decoder not in ("av", "decord"):
-            raise ConfigError(f"VideoDataset requires decoder 'av' or 'decord', got {decoder!r}")
+class VideoDataset(FolderDataset):
+    """Windows of a video dataset; arguments as 0.0.3 (``video_keys`` are the media columns,
+    default: every sub-folder holding ``ep_*.mp4``) plus those of :class:`FolderDataset`
+    by keyword, and ``decoder`` (``"av"``, ``"decord"`` or None for whichever is installed)."""
+
+    media_kind = "video"
+    meta_kind = "video"
+
+    def __init__(self, name: str | os.PathLike | None = None, video_keys: Sequence[str] | None = None, *, decoder: str | None = None, **kwargs: Any):
+        if decoder is None:
+            decoder = "decord" if not is_available("av") and is_available("decord") else "av"
+        if decoder not in DECODERS:
+            raise ConfigError(f"VideoDataset requires decoder 'av' or 'decord' (or None), got {decoder!r}")
         require(decoder, extra="video", purpose="VideoDataset")
-        super().__init__(name, frameskip=frameskip, num_steps=num_steps, transform=transform, keys_to_load=keys_to_load, cache_dir=cache_dir)
         self.decoder = decoder
         self._decoded: OrderedDict = OrderedDict()
+        super().__init__(name, folder_keys=video_keys, **kwargs)
 
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
         state["_decoded"] = OrderedDict()
         return state
 
-    def _episode_frames(self, col: str, ep: int) -> np.ndarray:
+    def _episode(self, col: str, ep: int) -> np.ndarray:
+        """Decoded frames ``(L, H, W, C)`` of episode ``ep`` of ``col`` (cropped to the recorded size)."""
         key = (col, ep)
         frames = self._decoded.get(key)
-        if frames is None:
-            frames = self._decode(self.path / col / f"episode_{ep:06d}.mp4")
-            h, w, c = self._images[col]
-            frames = frames[:, :h, :w, :1] if c == 1 else frames[:, :h, :w, :3]
-            self._decoded[key] = frames
-            if len(self._decoded) > EPISODES_IN_MEMORY:
-                self._decoded.popitem(last=False)
-        else:
+        if frames is not None:
             self._decoded.move_to_end(key)
+            return frames
+        frames = decode_video(self.layout.video_file(col, ep), self.decoder)
+        shape = self.layout.shapes.get(col)
+        if shape is not None:
+            h, w, c = shape
+            frames = frames[:, :h, :w, :1] if c == 1 else frames[:, :h, :w, :3]
+        self._decoded[key] = frames
+        if len(self._decoded) > EPISODES_IN_MEMORY:
+            self._decoded.popitem(last=False)
         return frames
 
-    def _decode(self, path: Path) -> np.ndarray:
-        if self.decoder == "decord":  # pragma: no cover - optional
-            decord = require("decord", extra="video")
-            return decord.VideoReader(str(path)).get_batch(list(range(len(decord.VideoReader(str(path)))))).asnumpy()
-        av = require("av", extra="video")
-        with av.open(str(path)) as container:
-            return np.stack([f.to_ndarray(format="rgb24") for f in container.decode(video=0)])
-
-    def _read_images(self, col: str, start: int, stop: int) -> np.ndarray:
-        parts = []
-        while start < stop:
-            ep = int(np.searchsorted(self._offsets, start, side="right") - 1)
-            first = int(self._offsets[ep])
-            end = min(stop, first + int(self._lengths[ep]))
-            parts.append(self._episode_frames(col, ep)[start - first : end - first])
-            start = end
-        if not parts:
-            h, w, c = self._images[col]
-            return np.empty((0, h, w, c), np.uint8)
-        return np.concatenate(parts) if len(parts) > 1 else parts[0]
+    def _frames(self, col: str, ep: int, steps: np.ndarray) -> np.ndarray:
+        frames = self._episode(col, ep)
+        if len(steps) and int(steps.max()) >= len(frames):
+            raise DatasetFormatError(
+                f"VideoDataset requires a frame per row in {self.layout.video_file(col, ep)}, got {len(frames)} frames "
+                f"for an episode of {int(self.lengths[ep])} rows"
+            )
+        return frames[steps]
 
 
-def write_video_dataset(dataset: Dataset, path: str | os.PathLike, fps: int = 30) -> Path:
+class VideoWriter(FolderWriter):
+    """:class:`FolderWriter` that stores each media column of an episode as ``<key>/ep_{e}.mp4``
+    (H.264, ``fps``; odd frame sizes are padded and ``<key>/frames.json`` records the true one)."""
+
+    def __init__(self, path: str | os.PathLike, *, mode: str = "append", fps: int = 30, quality: int = 10):
+        if isinstance(fps, bool) or not isinstance(fps, (int, float)) or fps <= 0:
+            raise ConfigError(f"VideoWriter requires fps > 0, got {fps!r}")
+        if not 0 <= quality <= 10:
+            raise ConfigError(f"VideoWriter requires 0 <= quality <= 10, got {quality!r}")
+        super().__init__(path, mode=mode)
+        self.fps, self.video_quality = fps, quality
+
+    def _write_media(self, col: str, ep: int, frames: np.ndarray) -> None:
+        write_mp4(self.path / col / f"ep_{ep}.mp4", frames, fps=self.fps, quality=self.video_quality)
+        h, w, c = frames.shape[1:]
+        sidecar = self.path / col / FRAMES_FILE
+        if h % 2 or w % 2 or c == 1:  # what the decoded frames do not say
+            sidecar.write_text(json.dumps({"shape": [h, w, c]}))
+
+
+def write_video_dataset(dataset: Dataset, path: str | os.PathLike, fps: int = 30, mode: str = "error") -> Path:
     """Convert ``dataset`` (e.g. an :class:`HDF5Dataset`) to a video dataset at ``path``."""
-    path = Path(path)
-    numeric, images = split_columns(dataset)
-    offsets, lengths = numeric["ep_offset"], numeric["ep_len"]
-    for col, data in images.items():
-        for ep, (o, n) in enumerate(zip(offsets, lengths)):
-            write_mp4(path / col / f"episode_{ep:06d}.mp4", data[int(o) : int(o) + int(n)], fps=fps, quality=10)
-    write_meta(path, "video", numeric, images, fps=fps)
-    return path
+    with VideoWriter(path, mode=mode, fps=fps) as writer:
+        writer.write_episodes(episodes_of(dataset))
+    return Path(path)

@@ -125,7 +125,7 @@ def test_preload_defaults_to_small_datasets(make_h5, monkeypatch, synth):
     assert set(small._cache) == {keys.PIXELS, keys.STATE}  # only the loaded columns
     monkeypatch.setattr(hdf5, "PRELOAD_BYTES", 10)
     assert HDF5Dataset(path)._cache == {}
-    assert set(HDF5Dataset(path, preload=True)._cache) == set(small.column_names)
+    assert set(HDF5Dataset(path, preload=True)._cache) == set(small.stored_columns)
     lazy = HDF5Dataset(path, preload=False, keys_to_cache=[keys.PIXELS])
     assert set(lazy._cache) == {keys.PIXELS}
     # images kept in memory still read back as (N, H, W, C) rows everywhere

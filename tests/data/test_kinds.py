@@ -39,7 +39,7 @@ def assert_same_numeric(a: Dataset, b: Dataset):
 def test_folder_dataset_round_trip(h5, tmp_path):
     write_folder_dataset(h5, tmp_path / "folder")
     ds = FolderDataset(tmp_path / "folder", num_steps=2)
-    assert ImageDataset is FolderDataset and isinstance(ds, Dataset)
+    assert issubclass(ImageDataset, FolderDataset) and isinstance(ds, Dataset)
     assert sorted(ds.column_names) == sorted(h5.column_names)
     assert_same_numeric(ds, h5)
     diff = np.abs(ds[3][keys.PIXELS].numpy().astype(int) - h5[3][keys.PIXELS].numpy().astype(int))
@@ -59,7 +59,7 @@ def test_video_dataset_round_trip(h5, tmp_path):
 
 
 def test_directory_dataset_errors(h5, tmp_path):
-    with pytest.raises(FileNotFoundError, match="meta.json"):
+    with pytest.raises(FileNotFoundError, match="does not exist"):
         FolderDataset(tmp_path / "missing")
     write_folder_dataset(h5, tmp_path / "folder")
     with pytest.raises(ValueError, match="video"):
@@ -68,18 +68,18 @@ def test_directory_dataset_errors(h5, tmp_path):
 
 def test_merge_dataset(h5, make_h5, tmp_path):
     write_folder_dataset(h5, tmp_path / "f")
-    folder = FolderDataset(tmp_path / "f", keys_to_load=[keys.STATE])
-    merged = MergeDataset([HDF5Dataset(h5.path, keys_to_load=[keys.ACTION]), folder], num_steps=2)
-    assert set(merged.column_names) == set(h5.column_names)
+    folder = FolderDataset(tmp_path / "f", keys_to_load=[keys.STATE, keys.STEP_IDX], num_steps=2)
+    merged = MergeDataset([HDF5Dataset(h5.path, keys_to_load=[keys.ACTION], num_steps=2), folder])
+    assert set(merged.column_names) == {keys.ACTION, keys.STATE, keys.STEP_IDX}
     assert_same_numeric(merged, h5)
     with pytest.raises(ConfigError, match="episode lengths"):
         MergeDataset([h5, HDF5Dataset(make_h5((3, 3), name="other"))])
 
 
 def test_concat_dataset(make_h5, synth):
-    a = HDF5Dataset(make_h5((5, 7), name="a"))
-    b = HDF5Dataset(make_h5((4,), name="b"))
-    cat = ConcatDataset([a, b], num_steps=2, frameskip=2)
+    a = HDF5Dataset(make_h5((5, 7), name="a"), num_steps=2, frameskip=2)
+    b = HDF5Dataset(make_h5((4,), name="b"), num_steps=2, frameskip=2)
+    cat = ConcatDataset([a, b])
     assert cat.lengths.tolist() == [5, 7, 4] and cat.offsets.tolist() == [0, 5, 12]
     assert len(cat) == 2 + 4 + 1
     last = cat[len(cat) - 1]
