@@ -95,13 +95,11 @@ def record_dataset(
     from ..data.utils import dataset_file
     from ..data.writer import HDF5Writer
     from .checks import check_seed
-    from .evaluate import reseed_policy
 
     if isinstance(episodes, bool) or not isinstance(episodes, (int, np.integer)) or episodes < 1:
         raise ConfigError(f"record_dataset requires episodes to be a positive int, got {episodes!r}")
     seed = check_seed("World.record_dataset", seed)
     path = dataset_file(dataset_name, cache_dir)
-    n = int(world.num_envs)
     with HDF5Writer(path) as writer:
         have = writer.num_episodes
         if have >= episodes:
@@ -110,55 +108,137 @@ def record_dataset(
         if have:
             logger.info("Resuming %s: %d of %d episodes on disk", path, have, episodes)
         with_idx = have == 0 or keys.EP_IDX in writer.columns  # files of older versions have no ep_idx
-        if writer.next_seed is not None:
-            next_seed = writer.next_seed
-        elif seed is not None:
-            next_seed = int(seed)
-        else:
-            next_seed = int(np.random.SeedSequence().entropy % SEED_LIMIT)
-
-        def take(k: int) -> list[int]:
-            nonlocal next_seed
-            seeds = [(next_seed + i) % SEED_LIMIT for i in range(k)]
-            next_seed = (next_seed + k) % SEED_LIMIT
-            return seeds
-
-        reseed_policy(world.policy, next_seed)
-        world.reset(seed=take(n), options=options)
-        buffers: list[dict[str, list[np.ndarray]]] = [{} for _ in range(n)]
-
-        def push(env_ids: Sequence[int]) -> None:
-            frames = _last_frames(world.infos)
-            for i in env_ids:
-                for key, value in frames.items():
-                    buffers[i].setdefault(key, []).append(value[i])
-
-        push(range(n))
-        done, rows, todo = 0, 0, episodes - have
-        t0 = time.perf_counter()
-        with _progress(world, episodes, f"Recording {path.name}", initial=have) as bar:
-            while done < todo:
-                world.step()
-                push(range(n))
-                ended = np.flatnonzero(np.asarray(world.terminateds) | np.asarray(world.truncateds))
-                if not len(ended):
-                    continue
-                first = writer.num_episodes
-                batch = [_finish_episode(buffers[i], first + j if with_idx else None) for j, i in enumerate(ended[: todo - done])]
-                writer.write_episodes(batch, next_seed=next_seed)
-                done += len(batch)
-                rows += sum(len(next(iter(ep.values()))) for ep in batch)
-                bar.update(len(batch))
-                bar.set_postfix(rows_per_s=f"{rows / max(time.perf_counter() - t0, 1e-9):.0f}")
-                if done >= todo:
-                    break
-                ids = [int(i) for i in ended]
-                world.reset_envs(ids, seeds=take(len(ids)), options=[options] * len(ids))
-                for i in ids:
-                    buffers[i] = {}
-                push(ids)
-        logger.info("Recorded %d episodes (%d rows) to %s", done, rows, path)
+        first_seed = writer.next_seed if writer.next_seed is not None else seed
+        record_episodes(world, writer, episodes - have, first_seed, options, f"Recording {path.name}", with_idx, have)
     return path
+
+
+def record_episodes(
+    world: Any,
+    writer: Any,
+    episodes: int,
+    seed: int | None,
+    options: dict | None,
+    label: str,
+    with_idx: bool = True,
+    done_before: int = 0,
+) -> int:
+    """Record ``episodes`` complete episodes into ``writer``; episode k gets seed ``seed + k``.
+
+    ``writer`` is an :class:`~stable_worldmodel.data.writer.HDF5Writer` (batches committed with
+    ``next_seed``) or any writer with ``write_episode(episode)`` (upstream 0.1.1's protocol).
+    Returns the number of rows written.
+    """
+    from .evaluate import reseed_policy
+
+    n = int(world.num_envs)
+    next_seed = int(seed) if seed is not None else int(np.random.SeedSequence().entropy % SEED_LIMIT)
+    committing = hasattr(writer, "write_episodes") and hasattr(writer, "next_seed")
+    written = int(getattr(writer, "num_episodes", 0) or 0)
+
+    def take(k: int) -> list[int]:
+        nonlocal next_seed
+        seeds = [(next_seed + i) % SEED_LIMIT for i in range(k)]
+        next_seed = (next_seed + k) % SEED_LIMIT
+        return seeds
+
+    reseed_policy(world.policy, next_seed)
+    world.reset(seed=take(n), options=options)
+    buffers: list[dict[str, list[np.ndarray]]] = [{} for _ in range(n)]
+
+    def push(env_ids: Sequence[int]) -> None:
+        frames = _last_frames(world.infos)
+        for i in env_ids:
+            for key, value in frames.items():
+                buffers[i].setdefault(key, []).append(value[i])
+
+    push(range(n))
+    done = rows = 0
+    t0 = time.perf_counter()
+    with _progress(world, episodes + done_before, label, initial=done_before) as bar:
+        while done < episodes:
+            world.step()
+            push(range(n))
+            ended = np.flatnonzero(np.asarray(world.terminateds) | np.asarray(world.truncateds))
+            if not len(ended):
+                continue
+            batch = [_finish_episode(buffers[i], written + j if with_idx else None) for j, i in enumerate(ended[: episodes - done])]
+            if committing:
+                writer.write_episodes(batch, next_seed=next_seed)
+            else:
+                for episode in batch:
+                    writer.write_episode(episode)
+            written += len(batch)
+            done += len(batch)
+            rows += sum(len(next(iter(ep.values()))) for ep in batch)
+            bar.update(len(batch))
+            bar.set_postfix(rows_per_s=f"{rows / max(time.perf_counter() - t0, 1e-9):.0f}")
+            if done >= episodes:
+                break
+            ids = [int(i) for i in ended]
+            world.reset_envs(ids, seeds=take(len(ids)), options=[options] * len(ids))
+            for i in ids:
+                buffers[i] = {}
+            push(ids)
+    logger.info("%s: recorded %d episodes (%d rows)", label, done, rows)
+    return rows
+
+
+def collect(
+    world: Any,
+    path: str | os.PathLike | None = None,
+    episodes: int = 0,
+    seed: int | None = None,
+    options: dict | None = None,
+    format: str | None = None,  # noqa: A002 - upstream 0.1.1's name
+    writer: Any = None,
+    progress: bool = True,
+) -> None:
+    """Upstream 0.1.1's ``World.collect``: record ``episodes`` more episodes to ``path`` (or into ``writer``).
+
+    ``format`` is a registered dataset format (:func:`stable_worldmodel.data.list_formats`);
+    by default it follows the path: ``.h5`` / ``.hdf5`` or a path without a suffix is HDF5 (the
+    file gets ``.h5``), a folder already holding a dataset keeps its format. (0.1.1's default,
+    Lance, is not bundled: ``format="lance"`` names the package to install.) Parent folders
+    are created. Appends to an existing dataset.
+    """
+    from ..data.format import detect_format, get_format
+    from .checks import check_seed
+
+    if (path is None) == (writer is None):
+        raise ConfigError("World.collect requires exactly one of path= or writer=, got " + ("both" if path is not None else "neither"))
+    if isinstance(episodes, bool) or not isinstance(episodes, (int, np.integer)) or episodes < 1:
+        raise ConfigError(f"World.collect requires episodes to be a positive int, got {episodes!r}")
+    seed = check_seed("World.collect", seed)
+    verbose = world.verbose
+    world.verbose = verbose if progress else 0
+    try:
+        if writer is not None:
+            record_episodes(world, writer, int(episodes), seed, options, "Recording", with_idx=False)
+            return
+        target = Path(path).expanduser()
+        if format is None:
+            known = detect_format(target) if target.exists() else None
+            format = known.name if known is not None else "hdf5"
+        if format == "lance":
+            from ..errors import DependencyNotInstalled
+
+            raise DependencyNotInstalled(
+                "World.collect(format='lance') requires a Lance writer, which stable-worldmodel does not ship; "
+                "record HDF5 instead (format='hdf5', the default) or another registered format: "
+                "stable_worldmodel.data.list_formats()"
+            )
+        fmt = get_format(format)
+        if fmt.name == "hdf5" and target.suffix not in (".h5", ".hdf5"):
+            target = target.with_name(target.name + ".h5")
+        target.parent.mkdir(parents=True, exist_ok=True)
+        with fmt.open_writer(target) as sink:
+            have = int(getattr(sink, "num_episodes", 0) or 0)
+            first = sink.next_seed if getattr(sink, "next_seed", None) is not None else seed
+            with_idx = have == 0 or keys.EP_IDX in getattr(sink, "columns", [keys.EP_IDX])
+            record_episodes(world, sink, int(episodes), first, options, f"Recording {target.name}", with_idx, have)
+    finally:
+        world.verbose = verbose
 
 
 def _frame(infos: Mapping[str, Any], views: Sequence[str], env: int) -> np.ndarray:

@@ -329,6 +329,13 @@ class World:
 
         return record_dataset(self, dataset_name, episodes=episodes, seed=seed, cache_dir=cache_dir, options=options)
 
+    def collect(self, path=None, episodes: int = 0, seed: int | None = None, options: dict | None = None, format: str | None = None, writer: Any = None, progress: bool = True) -> None:  # noqa: A002
+        """Upstream 0.1.1's recorder: ``episodes`` more episodes to ``path`` (any registered format) or ``writer``
+        (see :func:`.recording.collect`)."""
+        from .recording import collect
+
+        collect(self, path, episodes=episodes, seed=seed, options=options, format=format, writer=writer, progress=progress)
+
     def record_video(self, video_path, max_steps: int = 500, fps: int = 30, viewname: str | list[str] = "pixels", seed: int | None = None, options: dict | None = None):
         """One MP4 per env of a rollout under the current policy (observation above goal)."""
         from .recording import record_video

@@ -283,3 +283,34 @@ def test_evaluate_from_dataset_callables_read_their_arguments_from_the_start_row
     callables = [{"method": "_set_goal_state", "args": {"goal_state": {"value": literal, "in_dataset": False}}}]
     world.evaluate_from_dataset(ds, [0, 1], [1, 2], goal_offset_steps=3, eval_budget=1, callables=callables, save_video=False)
     np.testing.assert_allclose(world.envs.call("_goal_state")[1], literal)
+
+
+def test_collect_writes_any_registered_format_and_appends(tmp_path):
+    from stable_worldmodel.data import load_dataset
+    from stable_worldmodel.errors import DependencyNotInstalled
+
+    world = make_world(2)
+    world.collect(tmp_path / "runs" / "toy", episodes=3, seed=0)  # no suffix: HDF5, parents created
+    assert (tmp_path / "runs" / "toy.h5").is_file()
+    world.collect(tmp_path / "runs" / "toy.h5", episodes=2, seed=0)  # appends 2 more
+    ds = load_dataset(str(tmp_path / "runs" / "toy.h5"))
+    assert ds.num_episodes == 5 and len({tuple(r) for r in ds.get_col_data(keys.STATE)[ds.offsets]}) == 5
+    world.collect(tmp_path / "folder", episodes=2, seed=0, format="folder", progress=False)
+    assert load_dataset(str(tmp_path / "folder")).num_episodes == 2
+    with pytest.raises(ConfigError, match="exactly one of path= or writer="):
+        world.collect(episodes=1)
+    with pytest.raises(DependencyNotInstalled, match="Lance"):
+        world.collect(tmp_path / "x.lance", episodes=1, format="lance")
+
+
+def test_collect_into_a_writer_object(tmp_path):
+    class Sink:
+        def __init__(self):
+            self.episodes = []
+
+        def write_episode(self, episode):
+            self.episodes.append(episode)
+
+    sink = Sink()
+    make_world(2).collect(writer=sink, episodes=3, seed=1)
+    assert len(sink.episodes) == 3 and all(keys.PIXELS in ep for ep in sink.episodes)
