@@ -309,7 +309,7 @@ class GoalDataset(_TorchDataset):
         probs = np.asarray(goal_probabilities, np.float64)
         if probs.shape != (3,) or np.any(probs < 0) or not np.isclose(probs.sum(), 1.0):
             raise ConfigError(
-                "GoalDataset requires goal_probabilities of 3 non-negative numbers (p_random, p_future, p_current) "
+                "GoalDataset requires goal_probabilities to be a 3-tuple of non-negative numbers (p_random, p_future, p_current) "
                 f"that sum to 1.0, got {goal_probabilities}"
             )
         if not 0.0 <= float(gamma) < 1.0:

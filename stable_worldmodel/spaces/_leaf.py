@@ -409,7 +409,7 @@ class RGBBox(Box):
         except (TypeError, ValueError) as exc:
             raise SpaceError(f"RGBBox requires a shape tuple of ints, got {shape!r}") from exc
         if 3 not in shape:
-            raise SpaceError(f"RGBBox requires a shape with a dimension of size 3 (RGB channels), got {shape}")
+            raise SpaceError(f"RGBBox requires a shape with a channel of size 3 (RGB), got {shape}")
         fixed = sorted({"low", "high", "dtype"} & kwargs.keys())
         if args or fixed:
             raise SpaceError(
