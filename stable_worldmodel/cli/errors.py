@@ -100,16 +100,9 @@ def output_dir(path, option: str):
     """``path`` created as a writable folder now, before long work; a ConfigError naming ``option`` otherwise."""
     from pathlib import Path
 
-    path = Path(path).expanduser()
-    if path.exists() and not path.is_dir():
-        raise ConfigError(f"{option} requires a folder, got {str(path)!r}, which is a file")
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ConfigError(f"{option} requires a folder it can create, got {str(path)!r}: {exc.strerror or exc}") from None
-    if not os.access(path, os.W_OK | os.X_OK):
-        raise ConfigError(f"{option} requires a writable folder, got {str(path)!r} (permission denied)")
-    return path
+    from ..data.utils import usable_dir
+
+    return usable_dir(Path(path).expanduser(), option)
 
 
 def output_file(path, option: str):

@@ -13,7 +13,7 @@ DEFAULT_DIRNAME = ".stable_worldmodel"
 DATASETS_SUBFOLDER = "datasets"  # where 0.1.1 keeps datasets inside the cache
 
 
-def _usable_dir(path: Path, what: str) -> Path:
+def usable_dir(path: Path, what: str) -> Path:
     """``path`` as a folder we can write to (created if missing); ConfigError otherwise."""
     from ..errors import ConfigError
 
@@ -49,17 +49,17 @@ def get_cache_dir(
             raise ConfigError(f"get_cache_dir requires cache_dir or override_root (the same thing), got both: {cache_dir!r} and {override_root!r}")
         cache_dir = override_root
     if cache_dir is not None:
-        root = _usable_dir(Path(cache_dir).expanduser(), "get_cache_dir(cache_dir=...)")
+        root = usable_dir(Path(cache_dir).expanduser(), "get_cache_dir(cache_dir=...)")
     elif os.environ.get(ENV_VAR):
-        root = _usable_dir(Path(os.environ[ENV_VAR]).expanduser(), f"the cache folder (${ENV_VAR})")
+        root = usable_dir(Path(os.environ[ENV_VAR]).expanduser(), f"the cache folder (${ENV_VAR})")
     else:
-        root = _usable_dir(Path.home() / DEFAULT_DIRNAME, "the cache folder (~/.stable_worldmodel)")
+        root = usable_dir(Path.home() / DEFAULT_DIRNAME, "the cache folder (~/.stable_worldmodel)")
     if sub_folder is None:
         return root
     sub = Path(str(sub_folder))
     if not str(sub_folder).strip() or sub.is_absolute() or ".." in sub.parts:
         raise ConfigError(f"get_cache_dir requires sub_folder to be a folder name inside the cache such as 'datasets', got {sub_folder!r}")
-    return _usable_dir(root / sub, f"the cache sub-folder {str(sub_folder)!r}")
+    return usable_dir(root / sub, f"the cache sub-folder {str(sub_folder)!r}")
 
 
 def _root(cache_dir: str | os.PathLike | None) -> Path:
@@ -121,7 +121,7 @@ def dataset_file(name: Any, cache_dir: str | os.PathLike | None = None, suffix: 
     if text.endswith(suffix):
         raise bad(f"drop the {suffix!r}, it is added")
     where = "cache_dir" if cache_dir is not None else "the cache folder"
-    root = _usable_dir(Path(cache_dir).expanduser(), where) if cache_dir is not None else get_cache_dir()
+    root = usable_dir(Path(cache_dir).expanduser(), where) if cache_dir is not None else get_cache_dir()
     return root / f"{text}{suffix}"
 
 

@@ -22,7 +22,7 @@ def a_file(tmp_path):
 @pytest.mark.parametrize(
     ("args", "match"),
     [
-        (["--video", "{f}/v"], "swm eval --video requires a folder it can create, got '.*afile/v'"),
+        (["--video", "{f}/v"], "swm eval --video requires a folder that can be created, got '.*afile/v'"),
         (["--video", "{f}"], "Invalid value for '--video': .*afile' is a file"),
         (["--json", "{f}/out.json"], "swm eval --json requires a folder, got '.*afile', which is a file"),
     ],
