@@ -299,7 +299,7 @@ def test_empty_dict():
     space.set_value({})
     space.reset()
     assert space.contains({}) and space.check()
-    assert "Dict" in space.to_str()
+    assert space.to_str() == "" and "Dict" in space.describe()
 
 
 def test_seed_makes_nested_sampling_deterministic():
@@ -342,9 +342,16 @@ def test_getitem_setitem_and_invalid_entries():
         Dict({}, constrain_fn="yes")
 
 
-def test_to_str_renders_tree():
+def test_to_str_is_the_tree_0_0_3_prints():
     space = make_nested()
-    text = space.to_str()
+    lines = space.to_str().splitlines()
+    assert "agent:" in lines and "    color: Box(0, 255, (3,), uint8)" in lines
+    assert "    size: Box(0.0, 1.0, (), float32)" in space.to_str()
+
+
+def test_describe_renders_tree_with_values():
+    space = make_nested()
+    text = space.describe()
     lines = text.splitlines()
     assert lines[0].startswith("Dict(sampling_order=['z', 'agent', 'a'])")
     assert any(line.startswith("    color: RGBBox((3,)) = [10, 20, 30]") for line in lines)

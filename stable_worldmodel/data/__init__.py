@@ -40,6 +40,7 @@ _ATTRS: dict[str, str] = {
     "record_video_from_dataset": "video",
     "load_dataset": "utils",
     "column_normalizer": "utils",
+    "convert": "utils",
     "FolderWriter": "folder",
     "VideoWriter": "video_dataset",
     "FORMATS": "format",

@@ -6,6 +6,8 @@ import os
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 __all__ = ["column_normalizer", "dataset_file", "get_cache_dir", "load_dataset", "resolve_dataset_dir", "resolve_dataset_path"]
 
 ENV_VAR = "STABLEWM_HOME"
@@ -206,3 +208,44 @@ def column_normalizer(dataset: Any, source: str, target: str, method: str = "zsc
 
         scaler.fit(np.asarray(dataset.get_col_data(source)))
     return ColumnTransform(scaler, source=source, target=target)
+
+
+def convert(
+    source: Any,
+    dest: str | os.PathLike,
+    *,
+    source_format: str | None = None,
+    dest_format: str = "hdf5",
+    cache_dir: str | os.PathLike | None = None,
+    progress: bool = True,
+    **dest_kwargs: Any,
+) -> Path:
+    """Copy dataset ``source`` (anything :func:`load_dataset` opens) to ``dest`` in ``dest_format``, episode by episode.
+
+    Upstream 0.1.1's function; its default destination, Lance, is not bundled here, so the
+    default is HDF5 (``dest`` gets ``.h5`` when it has no suffix). ``dest_kwargs`` go to the
+    destination writer (e.g. ``mode="overwrite"`` for the folder and video formats). Returns
+    the path written.
+    """
+    from tqdm.auto import tqdm
+
+    from .format import get_format
+
+    src = load_dataset(source, cache_dir=cache_dir, format=source_format)
+    fmt = get_format(dest_format)
+    dest = Path(dest).expanduser()
+    if fmt.name == "hdf5" and dest.suffix not in (".h5", ".hdf5"):
+        dest = dest.with_name(dest.name + ".h5")
+    columns = list(getattr(src, "stored_columns", None) or src.column_names)
+    data = {col: np.asarray(src.get_col_data(col)) for col in columns}
+    lengths, offsets = np.asarray(src.lengths, np.int64), np.asarray(src.offsets, np.int64)
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    with fmt.open_writer(dest, **dest_kwargs) as writer:
+        for ep in tqdm(range(len(lengths)), desc=f"Converting to {fmt.name}", unit="ep", disable=not progress):
+            start, stop = int(offsets[ep]), int(offsets[ep] + lengths[ep])
+            episode = {col: values[start:stop] for col, values in data.items()}
+            if hasattr(writer, "write_episode"):
+                writer.write_episode(episode)
+            else:
+                writer.write_episodes([episode])
+    return dest

@@ -385,16 +385,37 @@ class Dict(gym.spaces.Dict):
 
     # -- display -----------------------------------------------------------------------------------
     def to_str(self, indent: int = 0) -> str:
-        """Human-readable tree: names, space types and bounds, current and initial values."""
+        """The tree as 0.0.3 / 0.1.1 print it: ``name:`` for a Dict, ``name: Box(0, 255, (3,), uint8)`` for a leaf."""
+        pad = "    " * indent
+        lines = []
+        for key, space in self.spaces.items():
+            if isinstance(space, Dict):
+                lines.append(f"{pad}{key}:")
+                lines.append(space.to_str(indent + 1))
+            else:
+                lines.append(f"{pad}{key}: {_gym_repr(space)}")
+        return "\n".join(line for line in lines if line)
+
+    def describe(self, indent: int = 0) -> str:
+        """Human-readable tree with more than :meth:`to_str`: sampling order, constraints, current and initial values."""
         pad = "  " * (indent + 1)
         head = f"Dict(sampling_order={self._order}{', constrained' if self.constrain_fn else ''})"
         lines = [head]
         for key, space in self.spaces.items():
             if isinstance(space, Dict):
-                lines.append(f"{pad}{key}: {space.to_str(indent + 1)}")
+                lines.append(f"{pad}{key}: {space.describe(indent + 1)}")
             else:
                 flag = ", constrained" if space.constrain_fn else ""
                 lines.append(
                     f"{pad}{key}: {space!r}{flag} = {short_repr(space._value)} (init {short_repr(space._init_value)})"
                 )
         return "\n".join(lines)
+
+
+def _gym_repr(space: Any) -> str:
+    """Gymnasium's own text of a leaf (``Box(0, 255, (3,), uint8)``), as 0.0.3's ``to_str`` shows it."""
+    for base in type(space).__mro__:
+        if base.__module__.startswith("gymnasium.spaces") and "__repr__" in vars(base):
+            return base.__repr__(space)
+    return repr(space)
+

@@ -220,6 +220,8 @@ def collect(
         if format is None:
             known = detect_format(target) if target.exists() else None
             format = known.name if known is not None else "hdf5"
+            if known is None and target.suffix == ".lance":
+                logger.warning("%s: Lance is not bundled; writing HDF5 to %s.h5 (load_dataset(%r) finds it)", target, target, str(path))
         if format == "lance":
             from ..errors import DependencyNotInstalled
 
@@ -414,7 +416,8 @@ def evaluate_from_dataset(
     goals = [dataset.get_row_data(r + int(goal_offset_steps)) for r in rows]
     options = world.envs.call_each("reset_options_from_dataset", [(s, g) for s, g in zip(starts, goals)])
     n = int(world.num_envs)
-    world.reset_envs(list(range(n)), options=list(options))
+    seeds = world.draw_seeds(n)
+    world.reset_envs(list(range(n)), seeds=seeds, options=list(options))
     _apply_callables(world, callables, starts)
     views = [keys.PIXELS] if save_video and keys.PIXELS in world.infos else []
     frames: list[list[np.ndarray]] = [[_frame(world.infos, views, i)] if views else [] for i in range(n)]
@@ -438,4 +441,5 @@ def evaluate_from_dataset(
         "steps_to_success": steps_to_success,
         "episodes_idx": episodes_idx,
         "start_steps": start_steps,
+        "seeds": np.asarray(seeds, np.int64),  # the reset seeds (upstream 0.1.1 returns them too)
     }

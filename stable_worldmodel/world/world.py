@@ -269,8 +269,8 @@ class World:
             f"  action: {self.single_action_space}",
         ]
         space = self.single_variation_space
-        if space is not None and hasattr(space, "to_str"):
-            lines.append("  variation:\n" + "\n".join("    " + line for line in space.to_str().splitlines()))
+        if space is not None and hasattr(space, "describe"):
+            lines.append("  variation:\n" + "\n".join("    " + line for line in space.describe().splitlines()))
         return "\n".join(lines)
 
     # -- loops -----------------------------------------------------------------------------

@@ -106,3 +106,17 @@ def test_column_normalizer(make_h5):
     assert data.column_normalizer(ds, keys.ACTION, "a", method="none")(first)["a"] is first[keys.ACTION]
     with pytest.raises(ValueError, match="zscore"):
         data.column_normalizer(ds, keys.STATE, "s", method="minmax")
+
+
+def test_convert_copies_every_episode_to_another_format(tmp_path, make_h5):
+    from stable_worldmodel.data import HDF5Dataset, convert, load_dataset
+
+    src = make_h5((3, 4), image=(8, 8))
+    out = convert(str(src), tmp_path / "copy", progress=False)  # HDF5 by default: .h5 added
+    assert out == tmp_path / "copy.h5"
+    a, b = HDF5Dataset(src), HDF5Dataset(out)
+    assert b.lengths.tolist() == [3, 4]
+    for col in a.stored_columns:
+        np.testing.assert_array_equal(np.asarray(b.get_col_data(col)), np.asarray(a.get_col_data(col)), err_msg=col)
+    folder = convert(str(src), tmp_path / "folder", dest_format="folder", progress=False)
+    assert load_dataset(str(folder)).num_episodes == 2
