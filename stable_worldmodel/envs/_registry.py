@@ -40,6 +40,7 @@ BUILTIN: tuple[EnvEntry, ...] = (
         max_episode_steps=300,
     ),
     EnvEntry("swm/TwoRoom-v1", f"{_P}.two_room.env:TwoRoomEnv", ("paper", "continuous"), f"{_P}.two_room.expert:TwoRoomExpert", max_episode_steps=100),
+    EnvEntry("swm/TwoRoom-v0", f"{_P}.two_room.legacy:TwoRoomV0Env", ("continuous", "pymunk"), f"{_P}.two_room.legacy_expert:TwoRoomV0Expert"),
     EnvEntry(
         "swm/SimplePointMaze-v0",
         f"{_P}.simple_point_maze.env:SimplePointMazeEnv",

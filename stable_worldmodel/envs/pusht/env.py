@@ -26,9 +26,15 @@ The block-pushing task of Diffusion Policy and DINO-WM (physics in :mod:`.physic
 - **Reward** (shaped progress in [0, 1], 1 exactly at the goal pose):
   ``1 - 0.5 min(block position error / 256, 1) - 0.5 block angle error / pi``.
 - **Start**: agent and block positions and the block angle are drawn from the reset seed
-  (gym-pusht's ranges; see :mod:`.variation` for all 16 factors of variation).
+  (gym-pusht's ranges; see :mod:`.variation` for all 17 factors of variation).
 - **Rendering**: anti-aliased, drawn directly at ``render_size`` (224x224 by default; World
   sets its ``image_shape`` through :meth:`set_render_size`). Headless (OpenCV, no window).
+  The goal silhouette is drawn unless the factor ``rendering.render_goal`` is 0.
+- **Info** (upstream's keys and meaning): ``goal``, ``goal_state``, ``goal_proprio``, and
+  ``pos_agent`` (2,) agent position, ``vel_agent`` (2,) agent velocity, ``block_pose`` (3,)
+  block x, y and angle (not wrapped), ``goal_pose`` (3,) the pose the goal silhouette is
+  drawn at (``goal_state[2:5]``), ``n_contacts`` (int) contact points solved during the last
+  step divided by its sub-step count, rounded up (0 after reset).
 """
 
 from __future__ import annotations
@@ -42,7 +48,7 @@ import numpy as np
 from ... import keys
 from ...errors import ConfigError
 from ..base import DatasetResetMixin, flatten_values, apply_variation_options
-from .physics import CONTROL_HZ, WINDOW, PushTPhysics, body_state, set_pose
+from .physics import CONTROL_HZ, SIM_HZ, WINDOW, PushTPhysics, body_state, on_post_solve, set_pose
 from .render import draw_scene
 from .shapes import SHAPES, SYMMETRY, ShapeSpec, angle_error, shape_spec, to_world
 from .variation import AGENT_UNIT, BLOCK_UNIT, build_variation_space, draw_seeded
@@ -52,6 +58,14 @@ ANGLE_TOLERANCE = math.pi / 9
 GOAL_AGENT_GAP = 20.0
 MAX_SPEED = 1e4  # bound of the velocity entries of the observation space (the PD agent stays under ~2000)
 _PROPRIO = [0, 1, 5, 6]
+_SUBSTEPS = SIM_HZ // CONTROL_HZ
+
+# Info keys of upstream's PushT (kept with their meaning; see the module docstring).
+POS_AGENT = "pos_agent"
+VEL_AGENT = "vel_agent"
+BLOCK_POSE = "block_pose"
+GOAL_POSE = "goal_pose"
+N_CONTACTS = "n_contacts"
 
 
 def goal_agent_offset(block: ShapeSpec, agent: ShapeSpec) -> np.ndarray:
@@ -121,6 +135,8 @@ class PushT(DatasetResetMixin, PushTPhysics, gym.Env):
         self._goal_state = np.zeros(7)
         self._goal_img: np.ndarray | None = None
         self._values: dict[str, Any] = self.variation_space.value
+        self._contact_points = 0  # counted by _count_contacts during a step
+        self._n_contacts = 0
 
     # -- protocol hooks ---------------------------------------------------------------------
     def set_render_size(self, size: tuple[int, int]) -> None:
@@ -162,6 +178,8 @@ class PushT(DatasetResetMixin, PushTPhysics, gym.Env):
         self._specs = {"agent": agent_spec, "block": block_spec, "goal": goal_spec}
 
         self.new_space()
+        on_post_solve(self.space, self._count_contacts)
+        self._contact_points = self._n_contacts = 0
         self.agent = self.add_spec(agent_spec, v["agent"]["start_position"], float(v["agent"]["angle"]), kinematic=True)
         self.agent.velocity = tuple(float(x) for x in v["agent"]["velocity"])
         self.block = self.add_spec(block_spec, v["block"]["start_position"], float(v["block"]["angle"]))
@@ -183,7 +201,9 @@ class PushT(DatasetResetMixin, PushTPhysics, gym.Env):
         mx, my = self._relative_move(action)
         x, y = self.agent.position
         target = (min(max(x + self.action_scale * mx, 0.0), WINDOW), min(max(y + self.action_scale * my, 0.0), WINDOW))
+        self._contact_points = 0
         self.pd_step(self.agent, self.space, target)
+        self._n_contacts = -(-self._contact_points // _SUBSTEPS)  # ceil, as upstream
         self._state = body_state(self.agent, self.block)
         success, _ = self.eval_state(self._goal_state, self._state)
         return self._obs(), self._reward(self._state), success, False, self._info()
@@ -224,6 +244,9 @@ class PushT(DatasetResetMixin, PushTPhysics, gym.Env):
         pos = min(float(np.hypot(*(state[2:4] - g[2:4]))) / (WINDOW / 2), 1.0)
         return float(1.0 - 0.5 * pos - 0.5 * float(angle_error(state[4], g[4], self._symmetry())) / np.pi)
 
+    def _count_contacts(self, arbiter, space, data) -> None:
+        self._contact_points += len(arbiter.contact_point_set.points)
+
     def _symmetry(self) -> int:
         return SYMMETRY[self._specs["block"].name] if self._specs else 1
 
@@ -238,15 +261,21 @@ class PushT(DatasetResetMixin, PushTPhysics, gym.Env):
             keys.GOAL: self._goal_img.copy(),
             keys.GOAL_STATE: self._goal_state.copy(),
             keys.GOAL_PROPRIO: self._goal_state[_PROPRIO].copy(),
+            POS_AGENT: self._state[0:2].copy(),
+            VEL_AGENT: self._state[5:7].copy(),
+            BLOCK_POSE: np.array([*self.block.position, self.block.angle], np.float64),
+            GOAL_POSE: self._goal_state[2:5].copy(),
+            N_CONTACTS: self._n_contacts,
         }
 
     def _draw(self, agent_xy, agent_angle: float, block_xy, block_angle: float) -> np.ndarray:
         v = self._values
         g = self._goal_state
+        goal = (self._specs["goal"], g[2:4], g[4], v["goal"]["color"]) if int(v["rendering"]["render_goal"]) else None
         return draw_scene(
             self.render_size,
             v["background"]["color"],
-            (self._specs["goal"], g[2:4], g[4], v["goal"]["color"]),
+            goal,
             (self._specs["block"], block_xy, block_angle, v["block"]["color"]),
             (self._specs["agent"], agent_xy, agent_angle, v["agent"]["color"]),
         )

@@ -138,6 +138,18 @@ class PushTPhysics:
             py += vy * dt
 
 
+def on_post_solve(space, callback) -> None:
+    """Call ``callback(arbiter, space, data)`` after each solved contact between any two shapes.
+
+    The shapes of PushT all have collision type 0 (pymunk's default), as in the original's
+    ``space.on_collision(0, 0, post_solve=...)``; pymunk 6 spells it ``add_collision_handler``.
+    """
+    if hasattr(space, "on_collision"):  # pymunk >= 7
+        space.on_collision(0, 0, post_solve=callback)
+    else:
+        space.add_collision_handler(0, 0).post_solve = callback
+
+
 def pd_gains(n_substeps: int = SIM_HZ // CONTROL_HZ) -> tuple[float, float]:
     """``(g_u, g_v)``: one env step moves the agent by ``g_u * offset + g_v * v0`` (per axis).
 
@@ -174,4 +186,6 @@ def body_state(agent, block) -> np.ndarray:
     return np.array([ax, ay, bx, by, block.angle % (2 * math.pi), vx, vy], np.float64)
 
 
-__all__ = ["CONTROL_HZ", "K_P", "K_V", "SHAPES", "SIM_HZ", "WINDOW", "PushTPhysics", "body_state", "pd_gains", "set_pose"]
+__all__ = [
+    "CONTROL_HZ", "K_P", "K_V", "SHAPES", "SIM_HZ", "WINDOW", "PushTPhysics", "body_state", "on_post_solve", "pd_gains", "set_pose",
+]

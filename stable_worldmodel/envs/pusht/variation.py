@@ -1,4 +1,4 @@
-"""The 16 factors of variation of PushT and how reset draws the per-seed ones.
+"""The 17 factors of variation of PushT and how reset draws the per-seed ones.
 
 ======================  =========================  ==========================================
 factor                  default                    range
@@ -19,6 +19,7 @@ goal.scale              1.0                        [0.7, 1.3] x the block's size
 goal.angle              pi/4                       [-pi, pi]
 goal.position           (256, 256)                 [150, 362]^2
 background.color        white                      any RGB
+rendering.render_goal   1                          0 or 1: draw the goal silhouette (upstream's)
 ======================  =========================  ==========================================
 
 "Per seed" factors (:data:`SEEDED`) are drawn from the reset seed at every reset, as in
@@ -85,6 +86,7 @@ def build_variation_space() -> spaces.Dict:
                 }
             ),
             "background": spaces.Dict({"color": _rgb((255, 255, 255))}),
+            "rendering": spaces.Dict({"render_goal": spaces.Discrete(2, init_value=1)}),
         }
     )
 

@@ -1,0 +1,230 @@
+"""Env ids keep upstream's meaning (issue 13): facts observed on release 0.0.3 and upstream 0.1.1.
+
+The reference numbers below were recorded by running the original packages side by side with
+ours from the same states and actions; the tests replay them without the originals.
+"""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+pytest.importorskip("pymunk")
+pytest.importorskip("cv2")
+
+import stable_worldmodel as swm  # noqa: E402  (registers the swm/... ids)
+from stable_worldmodel import keys  # noqa: E402
+from stable_worldmodel.envs.pusht import PushT, PushTDiscrete  # noqa: E402
+from stable_worldmodel.envs.pusht.env import BLOCK_POSE, GOAL_POSE, N_CONTACTS, POS_AGENT, VEL_AGENT  # noqa: E402
+from stable_worldmodel.envs.two_room.legacy import TwoRoomV0Env  # noqa: E402
+from stable_worldmodel.envs.two_room.legacy_overlap import overlap_fractions  # noqa: E402
+
+# -- PushT (upstream 0.1.1) -----------------------------------------------------------------------
+PUSHT_GOAL = np.array([256.0, 200.0, 256.0, 256.0, math.pi / 4, 0.0, 0.0])
+PUSH_START = np.array([256.0, 210.0, 256.0, 256.0, 0.0, 0.0, 0.0])
+# upstream 0.1.1 after 15 steps of (0, 0.4) from PUSH_START: state and n_contacts of each step
+UP_PUSH_FINAL = np.array([256.0, 449.7377786255, 223.5482835917, 426.8226972387, 1.00084269, 0.0, 148.6848907471])
+UP_PUSH_CONTACTS = [0, 0, 1, 1, 1, 1, 1, 1, 1, 1, 3, 2, 2, 2, 2]
+
+
+def _pusht(cls=PushT, start=PUSH_START):
+    env = cls(render_size=(32, 32))
+    obs, info = env.reset(seed=0, options={keys.STATE: start, keys.GOAL_STATE: PUSHT_GOAL})
+    return env, obs, info
+
+
+def _check_pusht_info(obs, info, block_angle):
+    s = obs[keys.STATE]
+    for key, shape in ((POS_AGENT, (2,)), (VEL_AGENT, (2,)), (BLOCK_POSE, (3,)), (GOAL_POSE, (3,))):
+        assert info[key].shape == shape and info[key].dtype == np.float64, key
+    np.testing.assert_array_equal(info[POS_AGENT], s[0:2])
+    np.testing.assert_array_equal(info[VEL_AGENT], s[5:7])
+    np.testing.assert_allclose(info[BLOCK_POSE], [s[2], s[3], block_angle])  # angle not wrapped
+    np.testing.assert_allclose(info[GOAL_POSE], [256.0, 256.0, math.pi / 4])  # where the goal silhouette is
+    assert isinstance(info[N_CONTACTS], int)
+
+
+@pytest.mark.parametrize("cls", [PushT, PushTDiscrete])
+def test_pusht_info_has_upstream_keys(cls):
+    start = PUSH_START.copy()
+    start[4] = 7.0  # beyond 2 pi: state[4] wraps, block_pose keeps pymunk's angle
+    env, obs, info = _pusht(cls, start)
+    assert obs[keys.STATE][4] == pytest.approx(7.0 - 2 * math.pi)
+    _check_pusht_info(obs, info, 7.0)
+    assert info[N_CONTACTS] == 0
+    action = np.zeros(2, np.float32) if cls is PushT else np.array([5, 5])
+    obs, _, _, _, info = env.step(action)
+    _check_pusht_info(obs, info, 7.0)
+
+
+def test_pusht_push_matches_upstream_trajectory_and_contacts():
+    env, _, _ = _pusht()
+    contacts = []
+    for _ in range(15):
+        obs, *_, info = env.step(np.array([0.0, 0.4], np.float32))
+        contacts.append(info[N_CONTACTS])
+    # upstream forms the PD target in float32 (action * 100), we in float64: ~1e-4 px apart
+    np.testing.assert_allclose(obs[keys.STATE], UP_PUSH_FINAL, rtol=0, atol=1e-3)
+    assert contacts == UP_PUSH_CONTACTS
+
+
+def test_pusht_render_goal_factor_of_upstream():
+    env = PushT(render_size=(64, 64))
+    assert "rendering.render_goal" in env.variation_space.names()
+    green = np.array([144, 238, 144])
+
+    def goal_pixels(render_goal):
+        env.reset(seed=0, options={keys.VARIATION_VALUES: {"rendering.render_goal": render_goal}})
+        return int(np.all(env.render() == green, axis=-1).sum())
+
+    assert int(env.variation_space["rendering"]["render_goal"].value) == 1
+    assert goal_pixels(1) > 20 and goal_pixels(0) == 0
+
+
+# -- TwoRoom-v0 (release 0.0.3) ---------------------------------------------------------------------
+V0_FACTORS = {  # name: default of 0.0.3
+    "agent.color": [255, 0, 0], "agent.radius": [15.0], "agent.position": [50.0, 50.0], "agent.max_energy": 100,
+    "agent.speed": [10.0], "goal.color": [0, 255, 0], "goal.radius": [15.0], "goal.position": [450.0, 450.0],
+    "wall.color": [115, 127, 145], "wall.thickness": 19, "wall.axis": 1, "wall.border_color": [180, 189, 204],
+    "door.color": [255, 255, 255], "door.number": 1, "door.size": [75, 75, 75], "door.position": [247, 247, 247],
+    "background.color": [255, 255, 255],
+}
+# 0.0.3 with the default layout: start, goal, actions -> final state, terminated per step
+V0_RUNS = {
+    "wall": ([150, 100], [400, 300], [1.0, 0.0], 20, [238.9187743963, 100.0, 400.0, 300.0, 80.0, 10.0], False),
+    "door": ([150, 247], [400, 247], [1.0, 0.0], 20, [238.9187743963, 247.0, 400.0, 247.0, 80.0, 10.0], False),
+    "slide": ([200, 100], [400, 300], [1.0, 0.3], 20, [238.9237462433, 160.0, 400.0, 300.0, 80.0, 10.0], False),
+    "near": ([385, 300], [400, 300], [0.4, 0.0], 3, [397.0, 300.0, 400.0, 300.0, 97.0, 10.0], True),
+}
+UP_NEAR_FRACTIONS = [0.5434886215028857, 0.7053920771706806, 0.872784787456714]
+UP_WALL_CONTACTS = [0] * 7 + [1] * 13
+# 0.0.3's last "wall" frame at 64x64, grey level averaged over 8x8 blocks
+UP_WALL_FRAME_BLOCKS = [
+    [240.0, 247.0, 247.0, 217.8, 247.0, 247.0, 247.0, 240.0], [247.0, 255.0, 255.0, 204.2, 255.0, 255.0, 255.0, 247.0],
+    [247.0, 255.0, 255.0, 222.0, 255.0, 255.0, 255.0, 247.0], [247.0, 255.0, 255.0, 222.0, 255.0, 255.0, 255.0, 247.0],
+    [247.0, 255.0, 255.0, 255.0, 255.0, 255.0, 225.8, 247.0], [247.0, 255.0, 255.0, 229.8, 255.0, 255.0, 255.0, 247.0],
+    [247.0, 255.0, 255.0, 222.0, 255.0, 255.0, 255.0, 247.0], [240.0, 247.0, 247.0, 218.2, 247.0, 247.0, 247.0, 240.0],
+]
+
+
+def _v0(start, goal, size=64, values=None):
+    env = TwoRoomV0Env(render_size=size)
+    options = {keys.VARIATION: [], keys.STATE: np.array(start, float), keys.GOAL_STATE: np.array(goal, float)}
+    if values:
+        options[keys.VARIATION_VALUES] = values
+    obs, info = env.reset(seed=0, options=options)
+    return env, obs, info
+
+
+def test_two_room_v0_is_registered_with_0_0_3_spaces_and_factors():
+    env = gym.make("swm/TwoRoom-v0", disable_env_checker=True).unwrapped
+    assert isinstance(env, TwoRoomV0Env)
+    state, proprio = env.observation_space[keys.STATE], env.observation_space[keys.PROPRIO]
+    np.testing.assert_array_equal(state.low, [9, 9, 9, 9, 50, 0.5])
+    np.testing.assert_array_equal(state.high, [494, 494, 494, 494, 200, 20])
+    np.testing.assert_array_equal(proprio.low, [9, 9, 0, 10])
+    np.testing.assert_array_equal(proprio.high, [494, 494, 200, 20])
+    assert env.action_space == gym.spaces.Box(-1.0, 1.0, (2,), np.float32)
+    assert sorted(env.variation_space.names()) == sorted(V0_FACTORS)
+    for name, default in V0_FACTORS.items():
+        group, leaf = name.split(".")
+        init = np.asarray(env.variation_space[group][leaf].init_value, float)
+        np.testing.assert_allclose(init, default, err_msg=name)
+    speed = env.variation_space["agent"]["speed"]
+    assert (float(speed.low[0]), float(speed.high[0])) == (10.0, 20.0)
+    size = env.variation_space["door"]["size"]
+    np.testing.assert_array_equal(size.start, [35] * 3)
+    np.testing.assert_array_equal(size.nvec, [50] * 3)
+
+
+@pytest.mark.parametrize("name", sorted(V0_RUNS))
+def test_two_room_v0_matches_0_0_3_trajectories(name):
+    start, goal, action, steps, final, success = V0_RUNS[name]
+    env, obs, info = _v0(start, goal)
+    assert set(info) >= {"pos_agent", "pos_goal", "n_contacts", "goal_pos", keys.GOAL, "energy", "max_energy",
+                         "fraction_of_goal", "fraction_of_agent", keys.GOAL_STATE, keys.GOAL_PROPRIO}
+    np.testing.assert_array_equal(obs[keys.PROPRIO], obs[keys.STATE][[0, 1, 4, 5]])
+    terms, rewards = [], []
+    for _ in range(steps):
+        obs, reward, term, trunc, info = env.step(np.array(action, np.float32))
+        terms.append(term)
+        rewards.append(reward)
+        assert not trunc
+    np.testing.assert_allclose(obs[keys.STATE], final, rtol=0, atol=1e-9)
+    assert terms == [success] * steps and rewards == [1.0 if success else -0.01] * steps
+    np.testing.assert_array_equal(info["pos_agent"], obs[keys.STATE][:2])
+    assert info["energy"] == 100 - steps and info["max_energy"] == 100
+
+
+def test_two_room_v0_success_fractions_and_contacts_as_0_0_3():
+    env, _, info = _v0([385, 300], [400, 300])
+    assert info["fraction_of_goal"] == 0.0 and info["fraction_of_agent"] == 0.0
+    for expected in UP_NEAR_FRACTIONS:
+        *_, info = env.step(np.array([0.4, 0.0], np.float32))
+        assert info["fraction_of_goal"] == pytest.approx(expected, abs=1e-9)
+        assert info["fraction_of_agent"] == pytest.approx(expected, abs=1e-9)
+    env, _, _ = _v0([150, 100], [400, 300])
+    contacts = [env.step(np.array([1.0, 0.0], np.float32))[-1]["n_contacts"] for _ in range(20)]
+    assert contacts == UP_WALL_CONTACTS
+    assert overlap_fractions((0, 0), 15, (100, 0), 15) == (0.0, 0.0)
+    assert overlap_fractions((3, 4), 15, (3, 4), 15) == pytest.approx((1.0, 1.0))
+    fog, foa = overlap_fractions((0, 0), 15, (5, 0), 30)  # the small disk lies inside the big one
+    assert foa == pytest.approx(1.0) and fog == pytest.approx(0.25, abs=2e-3)
+    assert env.eval_state(np.array([400.0, 300.0]), np.array([397.0, 300.0])) == (True, 3.0)
+
+
+def test_two_room_v0_energy_truncates():
+    env, obs, _ = _v0([150, 100], [400, 300], values={"agent.max_energy": 50})
+    assert obs[keys.STATE][4] == 50
+    truncs = [env.step(np.zeros(2, np.float32))[3] for _ in range(50)]
+    assert truncs == [False] * 49 + [True]
+
+
+def test_two_room_v0_frames_look_like_0_0_3():
+    env, _, info = _v0([150, 100], [400, 300])
+    for _ in range(20):
+        env.step(np.array([1.0, 0.0], np.float32))
+    frame = env.render()
+    assert frame.shape == (64, 64, 3) and frame.dtype == np.uint8
+    blocks = frame.astype(float).mean(-1).reshape(8, 8, 8, 8).mean(axis=(1, 3))
+    assert np.abs(blocks - np.array(UP_WALL_FRAME_BLOCKS)).max() < 3.0
+    goal = info[keys.GOAL]  # the agent drawn at the goal: red at (400, 300) -> (50, 37.5) at 64 px
+    np.testing.assert_array_equal(goal[37, 50], [255, 0, 0])
+    env.set_render_size((32, 40))
+    assert env.render().shape == (32, 40, 3)
+
+
+def test_two_room_v0_doors_merge_like_0_0_3():
+    values = {"door.number": 2, "door.position": np.array([100, 150, 0]), "door.size": np.array([75, 75, 40])}
+    _, _, info = _v0([100, 100], [400, 300], values=values)
+    layout = info["_layout"]
+    assert layout[4] == 1  # one merged gap: t in [100, 225], canvas 9 + t
+    np.testing.assert_array_equal(layout[5:7], [109, 234])
+    values = {"wall.axis": 0, "door.number": 1, "door.position": np.array([300, 0, 0])}
+    _, _, info = _v0([100, 100], [400, 400], values=values)
+    np.testing.assert_array_equal(info["_layout"][[0, 4, 5, 6]], [0, 1, 309, 384])
+
+
+def test_two_room_v0_reset_draws_start_goal_and_doors_per_seed():
+    env = TwoRoomV0Env(render_size=16)
+    draws = []
+    for seed in range(6):
+        obs, info = env.reset(seed=seed)
+        again, _ = env.reset(seed=seed)
+        np.testing.assert_array_equal(obs[keys.STATE], again[keys.STATE])
+        assert not env.check_collide(env.variation_space["agent"]["position"].value, "agent")
+        assert not env.check_collide(env.variation_space["goal"]["position"].value, "goal")
+        assert env.check_one_door_fit(env.variation_space["door"]["size"].value)
+        draws.append((*obs[keys.STATE][:4], *info["_layout"][4:]))
+    assert len(set(draws)) == 6
+    assert int(env.variation_space["wall"]["thickness"].value) == 19  # not in the default variations
+
+
+def test_two_room_v0_expert_in_world():
+    world = swm.World("swm/TwoRoom-v0", num_envs=4, image_shape=(16, 16), max_episode_steps=100, verbose=0)
+    world.set_policy(swm.envs.expert_policy("swm/TwoRoom-v0"))
+    assert world.evaluate(episodes=8, seed=0)["success_rate"] >= 75.0
+    world.close()
