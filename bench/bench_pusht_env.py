@@ -7,7 +7,7 @@ Prints:
   resize) does a few hundred per second, so the target is >= 5x that;
 - the PushTExpert's time per action and success rate within 300 steps over seeds 0..N-1 in a
   plain single-env loop, for defaults and for a few factors of variation;
-- the same success rate through ``World("swm/PushT-v1", num_envs=8, image_shape=(64, 64),
+- the same success rate through ``World("swm/PushT-v2", num_envs=8, image_shape=(64, 64),
   max_episode_steps=300).evaluate(episodes=N, seed=0)`` (skipped, with the reason, when World
   cannot be built), and the discrete expert's in the single-env loop.
 
@@ -77,11 +77,11 @@ def world_success(episodes: int) -> None:
     try:
         import stable_worldmodel as swm
 
-        world = swm.World("swm/PushT-v1", num_envs=8, image_shape=(64, 64), max_episode_steps=300, verbose=0)
+        world = swm.World("swm/PushT-v2", num_envs=8, image_shape=(64, 64), max_episode_steps=300, verbose=0)
     except Exception as exc:  # noqa: BLE001 - a benchmark reports why it skipped
         print(f"World evaluate: skipped ({type(exc).__name__}: {exc})")
         return
-    world.set_policy(swm.envs.expert_policy("swm/PushT-v1"))
+    world.set_policy(swm.envs.expert_policy("swm/PushT-v2"))
     t0 = time.perf_counter()
     result = world.evaluate(episodes=episodes, seed=0)
     print(f"World(num_envs=8).evaluate({episodes}, seed=0): success {result['success_rate']:.0f}% in {time.perf_counter() - t0:.1f} s")

@@ -7,6 +7,7 @@ is one line in :data:`BUILTIN` (or a call to :func:`register_env` from user code
 from __future__ import annotations
 
 import importlib
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -29,11 +30,21 @@ _ENTRIES: dict[str, EnvEntry] = {}
 WORLDS: set[str] = set()  # 0.0.3's name: every id registered through us (kept in step with _ENTRIES)
 
 _P = "stable_worldmodel.envs"
+# Likewise swm/SimplePointMaze-v0 (0.1.1's env) and -v1 (our grid maze).
+warnings.filterwarnings("ignore", message=r".*The environment swm/SimplePointMaze-v0 is out of date", category=DeprecationWarning)
 BUILTIN: tuple[EnvEntry, ...] = (
     EnvEntry("swm/Toy-v0", f"{_P}.toy.env:ToyEnv", ("toy", "continuous"), f"{_P}.toy.env:ToyExpert", max_episode_steps=100),
-    EnvEntry("swm/PushT-v1", f"{_P}.pusht.env:PushT", ("paper", "continuous", "pymunk"), f"{_P}.pusht.expert:PushTExpert", max_episode_steps=300),
+    EnvEntry("swm/PushT-v1", f"{_P}.pusht.v1:PushTV1", ("paper", "continuous", "pymunk"), f"{_P}.pusht.v1_expert:PushTV1Expert", max_episode_steps=300),
     EnvEntry(
         "swm/PushT-Discrete-v1",
+        f"{_P}.pusht.v1:PushTDiscreteV1",
+        ("discrete", "pymunk"),
+        f"{_P}.pusht.v1_expert:PushTDiscreteV1Expert",
+        max_episode_steps=300,
+    ),
+    EnvEntry("swm/PushT-v2", f"{_P}.pusht.env:PushT", ("continuous", "pymunk"), f"{_P}.pusht.expert:PushTExpert", max_episode_steps=300),
+    EnvEntry(
+        "swm/PushT-Discrete-v2",
         f"{_P}.pusht.env:PushTDiscrete",
         ("discrete", "pymunk"),
         f"{_P}.pusht.expert:PushTDiscreteExpert",
@@ -43,6 +54,12 @@ BUILTIN: tuple[EnvEntry, ...] = (
     EnvEntry("swm/TwoRoom-v0", f"{_P}.two_room.legacy:TwoRoomV0Env", ("continuous", "pymunk"), f"{_P}.two_room.legacy_expert:TwoRoomV0Expert"),
     EnvEntry(
         "swm/SimplePointMaze-v0",
+        f"{_P}.simple_point_maze.legacy:SimplePointMazeV0Env",
+        ("continuous",),
+        f"{_P}.simple_point_maze.legacy_expert:SimplePointMazeV0Expert",
+    ),
+    EnvEntry(
+        "swm/SimplePointMaze-v1",
         f"{_P}.simple_point_maze.env:SimplePointMazeEnv",
         ("continuous",),
         f"{_P}.simple_point_maze.expert:SimplePointMazeExpert",
@@ -88,6 +105,10 @@ def register_all() -> None:
             kwargs=entry.kwargs,
             max_episode_steps=entry.max_episode_steps,
         )
+    # swm/PushT-v1 (upstream 0.1.1's behaviour) and swm/PushT-v2 (our design) are two supported
+    # designs, not an old and a new one: silence Gymnasium's "v1 is out of date" notice for them
+    # (after Gymnasium's import, whose own DeprecationWarning filter would otherwise come first).
+    warnings.filterwarnings("ignore", r".*The environment swm/PushT(-Discrete)?-v1 is out of date", DeprecationWarning)
 
 
 def list_envs(tag: str | None = None) -> list[str]:

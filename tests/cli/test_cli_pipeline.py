@@ -159,7 +159,8 @@ def test_eval_with_variation(swm, error_line):
 def test_eval_unknown_env_suggests(swm, error_line):
     result = swm("eval", "TwoRoom")
     assert result.exit_code == 1
-    assert "Did you mean 'swm/TwoRoom-v1'" in error_line(result)
+    line = error_line(result)
+    assert "Did you mean" in line and "'swm/TwoRoom-v1'" in line
 
 
 # -- envs / fovs ---------------------------------------------------------------------------

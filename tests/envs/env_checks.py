@@ -12,12 +12,17 @@ from stable_worldmodel import keys
 def run_actions(env, seed: int, actions, options=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Reset with ``seed``/``options``, play ``actions``: frames (T+1, H, W, 3), states (T+1, D), goal image."""
     obs, info = env.reset(seed=seed, options=options)
-    frames, states = [env.render()], [obs[keys.STATE]]
+    frames, states = [env.render()], [_state(obs)]
     for a in actions:
         obs, *_ = env.step(a)
         frames.append(env.render())
-        states.append(obs[keys.STATE])
+        states.append(_state(obs))
     return np.stack(frames), np.stack(states), info[keys.GOAL]
+
+
+def _state(obs) -> np.ndarray:
+    """``obs[state]`` of a dict observation; a flat observation (``swm/SimplePointMaze-v0``) is the state."""
+    return obs[keys.STATE] if isinstance(obs, dict) else np.asarray(obs)
 
 
 def factor_value(env, name: str) -> np.ndarray:

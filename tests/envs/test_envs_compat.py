@@ -39,7 +39,7 @@ def _distance_to_block(world, steps):
     return out
 
 
-@pytest.mark.parametrize("env_id", ["swm/PushT-v1", "swm/PushT-Discrete-v1"])
+@pytest.mark.parametrize("env_id", ["swm/PushT-v2", "swm/PushT-Discrete-v2"])
 def test_pusht_weak_policy_keeps_the_agent_near_the_block(env_id):
     from stable_worldmodel.envs.pusht import WeakPolicy
 

@@ -6,7 +6,9 @@ ours from the same states and actions; the tests replay them without the origina
 
 from __future__ import annotations
 
+import json
 import math
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -228,3 +230,135 @@ def test_two_room_v0_expert_in_world():
     world.set_policy(swm.envs.expert_policy("swm/TwoRoom-v0"))
     assert world.evaluate(episodes=8, seed=0)["success_rate"] >= 75.0
     world.close()
+
+
+# -- PushT-v1 / PushT-Discrete-v1 (upstream 0.1.1's behaviour; our design is PushT-v2) -------------
+# Recorded from the original with tests/envs/data/record_pusht_v1.py: per case the start and goal
+# states, actions, then upstream's states, rewards, terminated, n_contacts and frames.
+_V1_DATA = Path(__file__).parent / "data"
+V1 = np.load(_V1_DATA / "pusht_v1_upstream.npz")
+V1_META = json.loads((_V1_DATA / "pusht_v1_upstream.json").read_text())
+V1_CASES = sorted({k.rsplit("/", 1)[0] for k in V1.files})
+MAX_MAD = 3.0  # mean absolute difference per pixel channel, out of 255
+
+
+def _v1_values(values):
+    if not values:
+        return None
+    return {k: np.asarray(v, np.uint8 if k.endswith("color") else np.float32 if k.endswith("scale") else None) for k, v in values.items()}
+
+
+def _v1_run(case, size):
+    env = gym.make(f"swm/{case.split('/')[0]}", render_size=(size, size)).unwrapped
+    options = {keys.STATE: V1[case + "/start"], keys.GOAL_STATE: V1[case + "/goal"]}
+    if V1_META[case + "/values"]:
+        options[keys.VARIATION_VALUES] = _v1_values(V1_META[case + "/values"])
+    obs, info = env.reset(seed=0, options=options)
+    out = {"states": [obs[keys.STATE]], "rewards": [], "terminated": [], "n_contacts": [info[N_CONTACTS]], "frames": [env.render()]}
+    goal = info[keys.GOAL]
+    for action in V1[case + "/actions"]:
+        obs, reward, terminated, truncated, info = env.step(action)
+        assert truncated is False
+        for key, value in (("states", obs[keys.STATE]), ("rewards", reward), ("terminated", terminated), ("n_contacts", info[N_CONTACTS])):
+            out[key].append(value)
+        out["frames"].append(env.render())
+    return {k: np.asarray(v) for k, v in out.items()}, goal
+
+
+def _mad(a, b):
+    return float(np.abs(np.asarray(a, np.float64) - np.asarray(b, np.float64)).mean())
+
+
+@pytest.mark.parametrize("case", V1_CASES)
+def test_pusht_v1_replays_upstream_states_rewards_success_and_contacts(case):
+    run, goal = _v1_run(case, 64)
+    np.testing.assert_allclose(run["states"], V1[case + "/states"], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(run["rewards"], V1[case + "/rewards"], rtol=0, atol=1e-9)
+    np.testing.assert_array_equal(run["terminated"], V1[case + "/terminated"])
+    np.testing.assert_array_equal(run["n_contacts"], V1[case + "/n_contacts"])
+    for i, frame in enumerate(run["frames"]):
+        assert frame.shape == (64, 64, 3) and frame.dtype == np.uint8
+        assert _mad(frame, V1[case + "/frames@64"][i]) <= MAX_MAD, (case, i)
+    assert _mad(goal, V1[case + "/goal@64"]) <= MAX_MAD
+
+
+@pytest.mark.parametrize("case", ["PushT-v1/push", "PushT-v1/colors", "PushT-v1/shape_plus", "PushT-Discrete-v1/grid"])
+def test_pusht_v1_frames_at_224_look_like_upstream(case):
+    run, _ = _v1_run(case, 224)
+    for mine, theirs in zip(run["frames"][[0, -1]], V1[case + "/frames@224"]):
+        assert mine.shape == (224, 224, 3)
+        assert _mad(mine, theirs) <= MAX_MAD
+
+
+def test_pusht_v1_reward_and_success_rule_of_upstream():
+    env = gym.make("swm/PushT-v1").unwrapped
+    goal = np.array([256.0, 200.0, 256.0, 256.0, 0.1, 0.0, 0.0])
+    near = goal + np.array([10.0, 0.0, 0.0, 10.0, 2 * math.pi - 0.2, 30.0, 0.0])  # angle wraps: 0.1 vs -0.1
+    success, dist = env.eval_state(goal, near)
+    assert success is True and dist == pytest.approx(np.linalg.norm(goal - near))
+    assert env.eval_state(goal, goal + np.array([15.0, 0, 0, 15.0, 0, 0, 0]))[0] is False  # 4-number distance 21.2
+    batch_ok, batch_dist = env.eval_state(np.stack([goal, goal]), np.stack([near, goal]))
+    assert batch_ok.tolist() == [True, True] and batch_dist[1] == 0.0
+
+
+def test_pusht_v1_factors_match_upstream():
+    env = gym.make("swm/PushT-v1").unwrapped
+    space = env.variation_space
+    assert sorted(space.names()) == sorted(V1_META["factors"])
+    for name, ref in V1_META["factors"].items():
+        leaf = space[name.split(".")[0]][name.split(".")[1]]
+        assert type(leaf).__name__ == ref["type"], name
+        np.testing.assert_allclose(np.asarray(leaf.init_value, np.float64), np.asarray(ref["default"], np.float64), err_msg=name)
+        if "low" in ref:
+            np.testing.assert_allclose(leaf.low, ref["low"], err_msg=name)
+            np.testing.assert_allclose(leaf.high, ref["high"], err_msg=name)
+            assert str(leaf.dtype) == ref["dtype"] and list(leaf.shape) == ref["shape"], name
+        if "n" in ref:
+            assert (int(leaf.n), int(leaf.start)) == (ref["n"], ref["start"]), name
+
+
+def test_pusht_v1_spaces_and_info_keys_of_upstream():
+    env = gym.make("swm/PushT-v1").unwrapped
+    obs, info = env.reset(seed=3)
+    assert sorted(info) == sorted(V1_META["info_keys"]) and info["env_name"] == V1_META["env_name"] == "PushT"
+    for key, (low, high) in V1_META["obs_space"].items():  # upstream's layout, bounds widened to what is reachable
+        assert np.all(env.observation_space[key].low <= low) and np.all(env.observation_space[key].high >= high)
+    assert env.observation_space[keys.STATE].high[4] == pytest.approx(2 * math.pi)
+    assert env.action_space.shape == (2,) and env.action_space.dtype == np.float32
+    np.testing.assert_array_equal(obs[keys.PROPRIO], obs[keys.STATE][[0, 1, 5, 6]])
+    np.testing.assert_array_equal(info[keys.GOAL_PROPRIO], info[keys.GOAL_STATE][[0, 1, 5, 6]])
+    np.testing.assert_allclose(info[GOAL_POSE], [256.0, 256.0, math.pi / 4])  # goal.position / goal.angle
+    # with no goal_state option the goal is a second draw of the start factors, not the silhouette
+    g = info[keys.GOAL_STATE]
+    assert 50 <= g[0] <= 450 and 100 <= g[2] <= 400 and not np.allclose(g[:5], obs[keys.STATE][:5])
+
+
+def test_pusht_discrete_v1_uses_upstreams_polar_grid():
+    from stable_worldmodel.envs.pusht.v1 import dequantize, quantize
+
+    env = gym.make("swm/PushT-Discrete-v1").unwrapped
+    assert env.action_space.nvec.tolist() == V1_META["discrete_nvec"] == [16, 16]
+    for key, move in V1_META["dequantized"].items():
+        index = np.array([int(x) for x in key.split(",")])
+        np.testing.assert_array_equal(dequantize(index), np.asarray(move, np.float32))
+        np.testing.assert_array_equal(quantize(dequantize(index)), index)
+    with pytest.raises(swm.errors.ConfigError, match="16x16"):
+        type(env)(quantizer=object())
+
+
+def test_pusht_v2_keeps_our_design_and_v1_has_an_expert():
+    from stable_worldmodel.envs.pusht.v1 import PushTDiscreteV1, PushTV1
+
+    assert type(gym.make("swm/PushT-v1").unwrapped) is PushTV1
+    assert type(gym.make("swm/PushT-Discrete-v1").unwrapped) is PushTDiscreteV1
+    assert type(gym.make("swm/PushT-v2").unwrapped) is PushT
+    assert type(gym.make("swm/PushT-Discrete-v2").unwrapped) is PushTDiscrete
+    v2 = gym.make("swm/PushT-v2").unwrapped
+    assert v2.variation_space["agent"]["scale"].init_value == 1.0  # our multiplier
+    for env_id, shape_dtype in (("swm/PushT-v1", np.float32), ("swm/PushT-Discrete-v1", np.int64)):
+        expert = swm.envs.expert_policy(env_id)
+        env = gym.make(env_id).unwrapped
+        obs, info = env.reset(seed=0)
+        action = expert.get_action({keys.STATE: obs[keys.STATE][None, None], keys.GOAL_STATE: info[keys.GOAL_STATE][None, None]})
+        assert action.shape == (1, 2) and action.dtype == shape_dtype
+        env.step(action[0])

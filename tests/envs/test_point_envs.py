@@ -1,4 +1,4 @@
-"""The env contract shared by ``swm/TwoRoom-v1`` and ``swm/SimplePointMaze-v0`` (both built on ``PointEnv``).
+"""The env contract shared by ``swm/TwoRoom-v1`` and ``swm/SimplePointMaze-v1`` (both built on ``PointEnv``).
 
 Env-specific rules (walls, doors, maze, dynamics, success distances) are tested in
 ``test_two_room.py`` and ``test_simple_point_maze.py``.
@@ -21,7 +21,7 @@ from stable_worldmodel import keys
 
 pytest.importorskip("cv2")
 
-TWO_ROOM, MAZE = "swm/TwoRoom-v1", "swm/SimplePointMaze-v0"
+TWO_ROOM, MAZE = "swm/TwoRoom-v1", "swm/SimplePointMaze-v1"
 # Per env: fixed start/goal, an action sequence, and one non-default value per factor
 # (the test below fails when a factor is added without one).
 CASES = {

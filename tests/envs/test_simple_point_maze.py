@@ -1,4 +1,4 @@
-"""Tests of ``swm/SimplePointMaze-v0``: maze, dynamics, collisions, success rule, state restore and the expert.
+"""Tests of ``swm/SimplePointMaze-v1``: maze, dynamics, collisions, success rule, state restore and the expert.
 
 The contract shared with TwoRoom (check_env, determinism, factors, rendering, World) is in
 ``test_point_envs.py``.

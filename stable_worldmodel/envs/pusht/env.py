@@ -1,4 +1,7 @@
-"""``swm/PushT-v1`` and ``swm/PushT-Discrete-v1``: push a T-shaped block onto a goal pose.
+"""``swm/PushT-v2`` and ``swm/PushT-Discrete-v2``: push a T-shaped block onto a goal pose.
+
+Our design of the task (``swm/PushT-v1`` / ``swm/PushT-Discrete-v1`` behave as upstream 0.1.1:
+:mod:`.v1`, subclasses of these classes).
 
 The block-pushing task of Diffusion Policy and DINO-WM (physics in :mod:`.physics`):
 
@@ -6,12 +9,12 @@ The block-pushing task of Diffusion Policy and DINO-WM (physics in :mod:`.physic
 - **Agent**: a kinematic disk of radius 15 driven by a PD controller (k_p = 100, k_v = 20)
   towards a target position.
 - **Block**: the T of two 120x30 bars (mass 1), pushed quasi-statically (no sliding).
-- **Action** (PushT-v1): ``a`` in [-1, 1]^2, a relative move: the PD target is
+- **Action** (PushT-v2): ``a`` in [-1, 1]^2, a relative move: the PD target is
   ``agent position + action_scale * a`` (``action_scale = 100`` world units by default),
   clipped to the table [0, 512]^2. From rest a full action moves the agent ~30 units in one
   step (:func:`.physics.pd_gains`); holding it, the agent cruises at ~37 units per step.
-- **Action** (PushT-Discrete-v1): ``MultiDiscrete([n_bins, n_bins])`` (``n_bins = 11``); index
-  ``i`` on an axis is the relative move ``sign(t) t^2`` of PushT-v1 with ``t = -1 + 2 i /
+- **Action** (PushT-Discrete-v2): ``MultiDiscrete([n_bins, n_bins])`` (``n_bins = 11``); index
+  ``i`` on an axis is the relative move ``sign(t) t^2`` of PushT-v2 with ``t = -1 + 2 i /
   (n_bins - 1)``: quadratic spacing, fine near 0 (0.04) for precise pushes, 1 at the ends.
 - **state** (float64, 7): agent x, y, block x, y (the body origin: the middle of the top
   edge of the T's bar), block angle in [0, 2pi), agent vx, vy. **proprio** (float64, 4):

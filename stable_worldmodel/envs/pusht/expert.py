@@ -56,7 +56,7 @@ class PushTExpert(ExpertPolicy):
 
     def __init__(
         self,
-        env_id: str = "swm/PushT-v1",
+        env_id: str = "swm/PushT-v2",
         action_scale: float = 100.0,
         angle_weight: float = 50.0,
         pos_done: float = 6.0,
@@ -149,9 +149,9 @@ class PushTExpert(ExpertPolicy):
 
 
 class PushTDiscreteExpert(PushTExpert):
-    """:class:`PushTExpert` rounded to the nearest move of ``swm/PushT-Discrete-v1``."""
+    """:class:`PushTExpert` rounded to the nearest move of ``swm/PushT-Discrete-v2``."""
 
-    def __init__(self, env_id: str = "swm/PushT-Discrete-v1", n_bins: int = 11, **kwargs: Any):
+    def __init__(self, env_id: str = "swm/PushT-Discrete-v2", n_bins: int = 11, **kwargs: Any):
         super().__init__(env_id=env_id, **kwargs)
         self.n_bins = int(n_bins)
 

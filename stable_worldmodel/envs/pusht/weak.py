@@ -5,7 +5,8 @@ Each step it draws a uniform move in ``[-1, 1]^2`` per env, turns it into a targ
 ``dist_constraint`` around the block (so the agent keeps touching the block), and returns the
 move that reaches the clipped target, clipped to ``[-1, 1]``. It reads positions from
 ``infos["state"]`` (agent x, y at 0:2, block x, y at 2:4), so it works with envs in worker
-processes. On ``swm/PushT-Discrete-v1`` the move is rounded to the nearest bin.
+processes. On ``swm/PushT-Discrete-v2`` the move is rounded to the nearest bin, on
+``swm/PushT-Discrete-v1`` it is binned on upstream's 16x16 polar grid.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ class WeakPolicy(BasePolicy):
         self.discrete = False
         self._scale = np.ones(1)
         self._n_bins: int | None = None
+        self._polar = False
         self.set_seed(seed)
 
     def set_seed(self, seed: int | None) -> None:
@@ -45,7 +47,8 @@ class WeakPolicy(BasePolicy):
         self.discrete = spec_id is not None and "Discrete" in spec_id
         scales = env.call("action_scale") if hasattr(env, "call") else [env.unwrapped.action_scale]
         self._scale = np.asarray(scales, np.float64).reshape(-1, 1)
-        if self.discrete:
+        self._polar = self.discrete and spec_id is not None and spec_id.endswith("-v1")
+        if self.discrete and not self._polar:
             bins = env.call("bins") if hasattr(env, "call") else [env.unwrapped.bins]
             self._n_bins = len(np.asarray(bins[0]))
 
@@ -56,6 +59,10 @@ class WeakPolicy(BasePolicy):
         move = self.rng.uniform(-1.0, 1.0, size=agent.shape)
         target = np.clip(agent + move * self._scale, block - self.dist_constraint, block + self.dist_constraint)
         action = np.clip((target - agent) / self._scale, -1.0, 1.0)
+        if self._polar:
+            from .v1 import quantize
+
+            return quantize(action)
         if self.discrete:
             from .env import nearest_bin
 

@@ -1,4 +1,4 @@
-"""``swm/SimplePointMaze-v0``: a point mass with friction driven through a grid maze to a goal.
+"""``swm/SimplePointMaze-v1``: a point mass with friction driven through a grid maze to a goal.
 
 World: a 7 x 7 grid of unit cells (x right, y down; cell ``(i, j)`` is row ``i``, column
 ``j`` and spans ``[j, j + 1] x [i, i + 1]``) taken from :data:`LAYOUTS` by the factor

@@ -1,4 +1,4 @@
-"""Scripted expert of ``swm/SimplePointMaze-v0``: BFS over the maze cells and a velocity controller."""
+"""Scripted expert of ``swm/SimplePointMaze-v1``: BFS over the maze cells and a velocity controller."""
 
 from __future__ import annotations
 
@@ -30,7 +30,7 @@ class SimplePointMazeExpert(ExpertPolicy):
     """
 
     def __init__(
-        self, env_id: str = "swm/SimplePointMaze-v0", noise: float = 0.0, seed: int | None = None, **kwargs: Any
+        self, env_id: str = "swm/SimplePointMaze-v1", noise: float = 0.0, seed: int | None = None, **kwargs: Any
     ):
         super().__init__(env_id=env_id, noise=noise, seed=seed, **kwargs)
         self.rng = np.random.default_rng(seed)
