@@ -30,8 +30,8 @@ _ENTRIES: dict[str, EnvEntry] = {}
 WORLDS: set[str] = set()  # 0.0.3's name: every id registered through us (kept in step with _ENTRIES)
 
 _P = "stable_worldmodel.envs"
-# Likewise swm/SimplePointMaze-v0 (0.1.1's env) and -v1 (our grid maze).
-warnings.filterwarnings("ignore", message=r".*The environment swm/SimplePointMaze-v0 is out of date", category=DeprecationWarning)
+#: ids whose older version is a supported design of its own (upstream's), not an outdated one
+SIDE_BY_SIDE = r"swm/(PushT(-Discrete)?-v1|TwoRoom-v0|SimplePointMaze-v0)"
 BUILTIN: tuple[EnvEntry, ...] = (
     EnvEntry("swm/Toy-v0", f"{_P}.toy.env:ToyEnv", ("toy", "continuous"), f"{_P}.toy.env:ToyExpert", max_episode_steps=100),
     EnvEntry("swm/PushT-v1", f"{_P}.pusht.v1:PushTV1", ("paper", "continuous", "pymunk"), f"{_P}.pusht.v1_expert:PushTV1Expert", max_episode_steps=300),
@@ -105,10 +105,11 @@ def register_all() -> None:
             kwargs=entry.kwargs,
             max_episode_steps=entry.max_episode_steps,
         )
-    # swm/PushT-v1 (upstream 0.1.1's behaviour) and swm/PushT-v2 (our design) are two supported
-    # designs, not an old and a new one: silence Gymnasium's "v1 is out of date" notice for them
-    # (after Gymnasium's import, whose own DeprecationWarning filter would otherwise come first).
-    warnings.filterwarnings("ignore", r".*The environment swm/PushT(-Discrete)?-v1 is out of date", DeprecationWarning)
+    # swm/PushT-v1 (upstream 0.1.1's behaviour) and swm/PushT-v2 (our design), TwoRoom-v0 (0.0.3's)
+    # and v1, SimplePointMaze-v0 (0.1.1's) and v1 (ours) are supported side by side: silence
+    # Gymnasium's "out of date" notice for them (after Gymnasium's import, whose own
+    # DeprecationWarning filter would otherwise come first).
+    warnings.filterwarnings("ignore", rf".*The environment {SIDE_BY_SIDE} is out of date", DeprecationWarning)
 
 
 def list_envs(tag: str | None = None) -> list[str]:
