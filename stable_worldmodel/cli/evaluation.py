@@ -12,7 +12,7 @@ import numpy as np
 
 from ..errors import ConfigError
 from .stats import SuccessSummary
-from .worlds import evaluate_policy, make_policy, make_world, reset_options
+from .worlds import checkpoint_run, evaluate_policy, make_policy, make_world, policy_history, reset_options
 
 __all__ = ["dataset_starts", "evaluate_cli"]
 
@@ -63,7 +63,11 @@ def evaluate_cli(
     start = time.perf_counter()
     record: dict[str, Any] = {"env": env, "policy": policy, "episodes": episodes, "seed": seed, "num_envs": num_envs, "image_size": image_size}
     limit = budget if from_dataset else max_steps
-    with make_world(env, num_envs=num_envs, image_size=image_size, max_steps=max(limit, budget) if from_dataset else max_steps, seed=seed) as world:
+    history = policy_history(policy)
+    if history > 1:
+        record["history_size"] = history
+    steps = max(limit, budget) if from_dataset else max_steps
+    with make_world(env, num_envs=num_envs, image_size=image_size, max_steps=steps, seed=seed, history_size=history) as world:
         if from_dataset:
             pol = make_policy(policy, env, seed=seed, plan=plan, device=device)
             world.set_policy(pol)
@@ -87,17 +91,19 @@ def evaluate_cli(
     )
     if plan is not None:
         record["plan"] = plan.as_dict()
+    if checkpoint_run(policy) is not None:
         record["model"] = _model_summary(policy)
     return summary, title, record
 
 
 def _held_out(policy: str, dataset: str) -> list[int] | None:
-    """The validation episodes of a wm: run trained on ``dataset`` (None: use every episode)."""
-    if not policy.startswith("wm:"):
+    """The validation episodes of a wm: / gc: run trained on ``dataset`` (None: use every episode)."""
+    run = checkpoint_run(policy)
+    if run is None:
         return None
     from ..wm.utils import read_protocol, resolve_checkpoint
 
-    protocol = read_protocol(resolve_checkpoint(policy[3:]))
+    protocol = read_protocol(resolve_checkpoint(run))
     if protocol.get("dataset") == Path(dataset).stem and protocol.get("val_episodes"):
         return list(protocol["val_episodes"])
     return None
@@ -106,7 +112,7 @@ def _held_out(policy: str, dataset: str) -> list[int] | None:
 def _model_summary(policy: str) -> dict[str, Any]:
     from ..wm.utils import read_protocol, resolve_checkpoint
 
-    weights = resolve_checkpoint(policy[3:])
+    weights = resolve_checkpoint(checkpoint_run(policy))
     protocol = read_protocol(weights)
     keep = ("model", "preset", "dataset", "steps", "seed", "frameskip", "history_size", "image_size", "final")
     return {"checkpoint": str(weights.parent), **{k: protocol[k] for k in keep if k in protocol}}

@@ -79,7 +79,7 @@ def collect(
 
 def eval_cmd(
     env: EnvArg,
-    policy: Annotated[str, typer.Option("--policy", "-p", metavar="POLICY", help="random, expert, or wm:RUN (plan with checkpoint RUN, see `swm list model`).")] = "random",
+    policy: Annotated[str, typer.Option("--policy", "-p", metavar="POLICY", help="random, expert, wm:RUN (plan with checkpoint RUN, see `swm list model`) or gc:RUN (act with the goal-conditioned policy RUN: gcbc, gcivl, gciql).")] = "random",
     episodes: Annotated[int, typer.Option("--episodes", "-n", parser=int_in(1), metavar="N", help="Episodes to evaluate.")] = 20,
     seed: SeedOpt = 0,
     variation: VariationOpt = None,
@@ -102,6 +102,7 @@ def eval_cmd(
     """Evaluate a policy on ENV and print its success rate with a 95% confidence interval.
 
     Example: swm eval swm/TwoRoom-v1 --policy wm:tr-lewm --solver cem --episodes 50 --num-envs 10 --json out.json
+    (or --policy gc:tr-gcbc for a policy trained with `swm train gcbc`)
     """
     from .display import console, success_table
     from .evaluation import evaluate_cli

@@ -21,7 +21,7 @@ def _float_pos(value: str) -> float:
 
 
 def train_cmd(
-    model: Annotated[str, typer.Argument(help="World model to train: lewm, pldm or dummy (see `swm list model`).", metavar="MODEL", show_default=False)],
+    model: Annotated[str, typer.Argument(help="Model to train: lewm, pldm, dummy (world models) or gcbc, gcivl, gciql (goal-conditioned policies).", metavar="MODEL", show_default=False)],
     dataset: Annotated[str, typer.Option("--dataset", "-d", metavar="NAME", help="Dataset in the cache (see `swm list dataset`).", show_default=False)],
     preset: Annotated[str, typer.Option("--preset", metavar="PRESET", help="Sizes and recipe: tiny (CPU, minutes), small (GPU), paper (upstream's).")] = "tiny",
     steps: Annotated[int | None, typer.Option("--steps", parser=int_in(1), metavar="N", help="Optimizer steps (default: the preset's).", show_default=False)] = None,
@@ -30,7 +30,7 @@ def train_cmd(
     lr: Annotated[float | None, typer.Option("--lr", parser=_float_pos, metavar="LR", help="Peak learning rate (default: the preset's).", show_default=False)] = None,
     device: Annotated[str, typer.Option("--device", metavar="DEV", help="auto, cpu, cuda, cuda:N or mps.")] = "auto",
     precision: Annotated[str, typer.Option("--precision", metavar="P", help="32, bf16 or 16 (16 needs CUDA).")] = "32",
-    name: Annotated[str | None, typer.Option("--name", metavar="RUN", help="Run name (default: <dataset>-<model>).", show_default=False)] = None,
+    name: Annotated[str | None, typer.Option("--name", "--run", metavar="RUN", help="Run name (default: <dataset>-<model>).", show_default=False)] = None,
     seed: SeedOpt = 0,
     resume: Annotated[bool, typer.Option("--resume", help="Continue the run RUN from its last checkpoint.")] = False,
     frameskip: Annotated[int | None, typer.Option("--frameskip", parser=int_in(1), metavar="K", help="Env steps per model step (the action block).", show_default=False)] = None,
@@ -38,10 +38,12 @@ def train_cmd(
     """Train MODEL on a recorded dataset; the checkpoint goes to $STABLEWM_HOME/checkpoints/RUN.
 
     Example: swm train lewm --dataset tworoom --preset tiny --name tr-lewm
+    (then: swm eval swm/TwoRoom-v1 --policy wm:tr-lewm; a gcbc / gcivl / gciql run: --policy gc:RUN)
     """
     import sys
 
     from ..train import train
+    from ..wm import get_config_class
     from .display import console
 
     overrides = {"frameskip": frameskip} if frameskip is not None else {}
@@ -56,4 +58,6 @@ def train_cmd(
         f"({result.samples_per_second:.0f} samples/s), train loss {result.train_loss:.4f}, val loss {val}",
         soft_wrap=True,
     )
-    out.print(f"Checkpoint: {result.folder} (plan with: swm eval ENV --policy wm:{result.run}); loss curve: {result.folder / 'loss.png'}", soft_wrap=True)
+    prefix = get_config_class(model).eval_prefix
+    how = "plan with" if prefix == "wm" else "act with"
+    out.print(f"Checkpoint: {result.folder} ({how}: swm eval ENV --policy {prefix}:{result.run}); loss curve: {result.folder / 'loss.png'}", soft_wrap=True)

@@ -36,19 +36,50 @@ def resolve_env(env_id: str) -> str:
 
 #: prefix of a learned world model policy: ``wm:<run>`` plans with checkpoint ``<run>``
 WM_PREFIX = "wm:"
+#: prefix of a goal-conditioned policy: ``gc:<run>`` acts with checkpoint ``<run>`` (gcbc, gcivl, gciql)
+GC_PREFIX = "gc:"
+#: what ``--policy`` accepts
+POLICY_CHOICES = (*POLICIES, f"{WM_PREFIX}<run>", f"{GC_PREFIX}<run>")
+
+
+def checkpoint_run(name: str) -> str | None:
+    """The run of a ``wm:<run>`` / ``gc:<run>`` policy name (None for the others)."""
+    for prefix in (WM_PREFIX, GC_PREFIX):
+        if name.startswith(prefix):
+            return name[len(prefix) :]
+    return None
 
 
 def check_policy(name: str) -> str:
-    """``name`` when it is one of :data:`POLICIES` or ``wm:<run>`` (a checkpoint that exists)."""
-    if name.startswith(WM_PREFIX):
+    """``name`` when it is one of :data:`POLICIES`, ``wm:<run>`` or ``gc:<run>`` (a checkpoint that exists)."""
+    run = checkpoint_run(name)
+    if run is not None:
         from ..wm.utils import resolve_checkpoint
 
-        run = name[len(WM_PREFIX) :]
         if not run:
-            raise unknown_name("policy", name, [*POLICIES, "wm:<run>"])
+            raise unknown_name("policy", name, POLICY_CHOICES)
         resolve_checkpoint(run)  # FileNotFoundError naming where it looked, with "did you mean"
         return name
-    return check_choice("policy", name, [*POLICIES, "wm:<run>"])
+    return check_choice("policy", name, POLICY_CHOICES)
+
+
+def policy_history(name: str) -> int:
+    """Frames of history the policy ``name`` acts on: a ``gc:<run>``'s recorded ``history_size``
+    (``protocol.json``, else the model's in ``config.json``), else 1."""
+    if not name.startswith(GC_PREFIX):
+        return 1
+    import json
+
+    from ..wm.utils import CONFIG_NAME, read_protocol, resolve_checkpoint
+
+    weights = resolve_checkpoint(name[len(GC_PREFIX) :])
+    history = read_protocol(weights).get("history_size")
+    if history is None and (weights.parent / CONFIG_NAME).is_file():
+        try:
+            history = json.loads((weights.parent / CONFIG_NAME).read_text()).get("history_size")
+        except (ValueError, AttributeError):  # an unreadable config fails later, with its own message
+            history = None
+    return int(history or 1)
 
 
 #: action noise of an expert recording a dataset (``swm collect``), for experts that take
@@ -78,8 +109,9 @@ def make_policy(
     name: str, env_id: str, seed: int | None = None, plan: Any = None, device: str = "auto", noise: float | None = None
 ) -> Any:
     """A fresh batched policy: ``random`` (seeded with ``seed``), the env's scripted ``expert``
-    (with Gaussian action ``noise`` of that std, seeded, when given), or ``wm:<run>`` planning
-    with checkpoint ``<run>`` (``plan``: a :class:`~stable_worldmodel.planning.learned.PlanSettings`)."""
+    (with Gaussian action ``noise`` of that std, seeded, when given), ``wm:<run>`` planning
+    with checkpoint ``<run>`` (``plan``: a :class:`~stable_worldmodel.planning.learned.PlanSettings`),
+    or ``gc:<run>`` acting with the goal-conditioned policy of checkpoint ``<run>``."""
     from ..envs import expert_policy
     from ..policy import RandomPolicy
 
@@ -93,6 +125,10 @@ def make_policy(
 
         settings = plan or PlanSettings(seed=seed or 0)
         return world_model_policy(name[len(WM_PREFIX) :], settings, device=device)[0]
+    if name.startswith(GC_PREFIX):
+        from ..planning.goal_policy import goal_conditioned_policy
+
+        return goal_conditioned_policy(name[len(GC_PREFIX) :], device=device)[0]
     if name == "random":
         return RandomPolicy(seed=seed)
     return expert_policy(env_id) if noise is None else expert_policy(env_id, noise=noise, seed=seed)

@@ -14,7 +14,6 @@ import logging
 from dataclasses import dataclass, field
 from typing import Any
 
-from .. import keys
 from ..errors import ConfigError
 from ..wm.config import GOAL_COSTS
 
@@ -95,14 +94,12 @@ def world_model_policy(
     import torch
 
     from ..policy import PlanConfig, WorldModelPolicy
-    from ..train.trainer import resolve_device
-    from ..wm.preprocess import ImageTransform, Normalizer
-    from ..wm.utils import load_checkpoint
+    from .goal_policy import load_run
 
     settings = settings or PlanSettings()
-    dev = resolve_device(device)
-    model, protocol = load_checkpoint(run, cache_dir)
-    model = model.to(dev).eval()
+    model, protocol, dev, process, transform = load_run(
+        run, "get_cost", "a world model with get_cost (lewm, pldm, dummy)", "gc", device, cache_dir
+    )
     for p in model.parameters():  # GD differentiates w.r.t. the actions only
         p.requires_grad_(False)
     if not hasattr(model, "goal_cost") and settings.cost != "final":
@@ -114,13 +111,6 @@ def world_model_policy(
         horizon=settings.horizon, receding_horizon=settings.receding_horizon or settings.horizon,
         history_len=1, action_block=block, warm_start=True,
     )
-    process = {}
-    norms = protocol.get("normalizers", {})
-    if keys.ACTION in norms:
-        process[keys.ACTION] = Normalizer.from_dict(norms[keys.ACTION])
-    size = int(protocol.get("image_size", 224))
-    images = ImageTransform(protocol.get("image_mean", (0.485, 0.456, 0.406)), protocol.get("image_std", (0.229, 0.224, 0.225)), size)
-    transform = {keys.PIXELS: images, keys.GOAL: images}
     solver = _make_solver(model, settings, dev)
     policy = WorldModelPolicy(solver, config, process=process, transform=transform)
     protocol = {**protocol, "plan": settings.as_dict(), "device": str(dev), "action_block": block}

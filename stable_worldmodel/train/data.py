@@ -5,6 +5,13 @@ A sample is a window of ``num_steps = history_size + num_preds`` frames spaced b
 ``action`` is ``(T, frameskip * A)``, the action block taken from each frame. Episodes are
 split into train / validation with a seeded permutation (recorded in the run's
 ``protocol.json``); the action normalizer is fitted on the train episodes' rows only.
+
+For a goal-conditioned config (:class:`~stable_worldmodel.train.goals.GoalConditioned`), a
+batch also holds ``goal_pixels (B, 1, C, S, S)``, a hindsight goal frame per sample drawn by
+the config's ``goal_probabilities`` (and ``actor_goal_pixels`` from
+``actor_goal_probabilities`` when it is not empty), from the sample's own split. Goal frames
+are preprocessed in the same call as the window's frames, so a goal equal to a frame stays
+bit-identical to it.
 """
 
 from __future__ import annotations
@@ -18,6 +25,7 @@ import torch
 from .. import keys
 from ..errors import ConfigError, DatasetFormatError, did_you_mean
 from ..wm.preprocess import Normalizer, preprocess_images
+from .goals import GoalConditioned, GoalSampler
 
 logger = logging.getLogger(__name__)
 
@@ -47,7 +55,7 @@ class TrainData:
         from ..data import HDF5Dataset
         from ..data.utils import resolve_dataset_path
 
-        self.cfg, self.device = cfg, device
+        self.cfg, self.device, self.seed = cfg, device, seed
         path = resolve_dataset_path(name, cache_dir)
         if not path.is_file():
             names = sorted(p.stem for p in path.parent.glob("*.h5"))
@@ -83,6 +91,18 @@ class TrainData:
                 "lower --frameskip / history or record longer episodes"
             )
         self.normalizer = self._fit_normalizer()
+        self.goals = self._goal_samplers(cfg) if isinstance(cfg, GoalConditioned) else {}
+
+    def _goal_samplers(self, cfg: Any) -> dict[str, GoalSampler]:
+        """Batch key -> sampler of its goals (``goal_pixels``, and ``actor_goal_pixels`` when configured)."""
+        groups = [self.train_episodes, self.val_episodes]
+        common = dict(gamma=cfg.goal_gamma, frameskip=cfg.frameskip, current_offset=(cfg.history_size - 1) * cfg.frameskip)
+        lengths, offsets = np.asarray(self.dataset.lengths), np.asarray(self.dataset.offsets)
+        goal_key = keys.goal_key(keys.PIXELS)
+        samplers = {goal_key: GoalSampler(lengths, offsets, groups, cfg.goal_probabilities, **common)}
+        if cfg.actor_goal_probabilities:
+            samplers[f"actor_{goal_key}"] = GoalSampler(lengths, offsets, groups, cfg.actor_goal_probabilities, **common)
+        return samplers
 
     def _fit_normalizer(self) -> Normalizer:
         actions = self.dataset.get_col_data(keys.ACTION).reshape(self.dataset.num_rows, -1)
@@ -99,21 +119,36 @@ class TrainData:
     def num_val(self) -> int:
         return len(self.val_index)
 
-    def batch(self, index: np.ndarray) -> dict[str, torch.Tensor]:
-        """The samples ``index`` (dataset sample ids) as a device batch."""
-        raw = self.dataset._batch(np.asarray(index, dtype=np.int64))
-        pixels = raw[keys.PIXELS].to(self.device, non_blocking=True)
+    def batch(self, index: np.ndarray, generator: torch.Generator | None = None) -> dict[str, torch.Tensor]:
+        """The samples ``index`` (dataset sample ids) as a device batch. Goals (goal-conditioned
+        configs) are drawn by ``generator``; without one, by a generator seeded from the run's
+        seed and ``index[0]`` (validation batches get the same goals every time)."""
+        index = np.asarray(index, dtype=np.int64)
+        raw = self.dataset._batch(index)
+        frames = raw[keys.PIXELS]
+        t = frames.shape[1]
+        goal_keys = list(self.goals)
+        if goal_keys:
+            generator = generator or torch.Generator().manual_seed(self.seed * 1_000_003 + int(index[0]))
+            eps, starts = self.dataset._locate_many(index)
+            frames = torch.cat([frames, *(self._goal_frames(self.goals[k].sample(eps, starts, generator)) for k in goal_keys)], dim=1)
         action = torch.nan_to_num(raw[keys.ACTION].to(self.device, dtype=torch.float32), 0.0)
         cfg = self.cfg
-        return {
-            keys.PIXELS: preprocess_images(pixels, cfg.image_mean, cfg.image_std, cfg.image_size),
-            keys.ACTION: self.normalizer.torch(action, repeat=cfg.frameskip),
-        }
+        pixels = preprocess_images(frames.to(self.device, non_blocking=True), cfg.image_mean, cfg.image_std, cfg.image_size)
+        out = {keys.PIXELS: pixels[:, :t], keys.ACTION: self.normalizer.torch(action, repeat=cfg.frameskip)}
+        for i, key in enumerate(goal_keys):
+            out[key] = pixels[:, t + i : t + i + 1]
+        return out
+
+    def _goal_frames(self, rows: np.ndarray) -> torch.Tensor:
+        """The pixels of dataset rows ``(B,)`` as ``(B, 1, C, H, W)`` uint8."""
+        frames = np.stack([self.dataset._read(keys.PIXELS, int(r), int(r) + 1)[0] for r in rows])  # (B, H, W, C)
+        return torch.from_numpy(np.ascontiguousarray(frames)).permute(0, 3, 1, 2).unsqueeze(1)
 
     def train_batch(self, generator: torch.Generator, batch_size: int) -> dict[str, torch.Tensor]:
         """A train batch of ``batch_size`` samples drawn uniformly (with replacement) by ``generator``."""
         pick = torch.randint(self.num_train, (batch_size,), generator=generator).numpy()
-        return self.batch(self.train_index[pick])
+        return self.batch(self.train_index[pick], generator)
 
     def val_batches(self, batch_size: int, max_samples: int) -> list[np.ndarray]:
         """Fixed validation index batches (evenly spread over the validation samples), of at most

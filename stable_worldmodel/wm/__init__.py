@@ -5,14 +5,16 @@ Importing this package is cheap; torch is imported when a model class is first u
 
     >>> import stable_worldmodel as swm
     >>> swm.wm.list_models()
-    ['dummy', 'lewm', 'pldm']
+    ['dummy', 'gcbc', 'gciql', 'gcivl', 'lewm', 'pldm']
     >>> model = swm.wm.make("lewm", preset="tiny", action_dim=2)      # doctest: +SKIP
 
 The contract every model follows (shapes: ``B`` envs, ``S`` candidates, ``T`` history,
 ``H`` horizon, ``A`` action block, ``D`` embedding) is written in :mod:`stable_worldmodel.wm.jepa`:
 ``encode(info) -> info`` (adds ``emb``, ``act_emb``), ``predict(emb, act_emb) -> emb``,
 ``rollout(info, candidates) -> info`` (adds ``predicted_emb``), ``get_cost(info, candidates)
--> (B, S)`` and ``loss(batch) -> {"loss": ..., named terms}``.
+-> (B, S)`` and ``loss(batch) -> {"loss": ..., named terms}``. The goal-conditioned baselines
+(``gcbc``, ``gcivl``, ``gciql``: :class:`~stable_worldmodel.wm.gcrl.GCRL`) act instead of
+planning: ``get_action(info) -> (B, A)`` and ``loss(batch)`` (see :mod:`stable_worldmodel.wm.gcrl`).
 """
 
 from __future__ import annotations
@@ -26,6 +28,8 @@ _ATTRS = {
     "LeWM": ".lewm",
     "PLDM": ".pldm",
     "DummyWorldModel": ".dummy",
+    "GCRL": ".gcrl",
+    "GCBC": ".gcbc",
     "JEPA": ".jepa",
     "SIGReg": ".loss",
     "VCReg": ".loss",
@@ -39,6 +43,9 @@ _ATTRS = {
     "LeWMConfig": ".lewm.config",
     "PLDMConfig": ".pldm.config",
     "DummyConfig": ".dummy_config",
+    "GCBCConfig": ".gcrl.config",
+    "GCIVLConfig": ".gcrl.config",
+    "GCIQLConfig": ".gcrl.config",
 }
 
 __all__ = ["get_config", "get_config_class", "list_models", "make", "register_model", *_ATTRS]
@@ -53,6 +60,8 @@ def __dir__() -> list[str]:
 if TYPE_CHECKING:  # pragma: no cover
     from .dummy import DummyWorldModel  # noqa: F401
     from .encoders import ConvEncoder, vit_hf  # noqa: F401
+    from .gcbc import GCBC  # noqa: F401
+    from .gcrl import GCRL  # noqa: F401
     from .lewm import LeWM  # noqa: F401
     from .loss import PLDMLoss, SIGReg, TemporalStraighteningLoss, VCReg  # noqa: F401
     from .pldm import PLDM  # noqa: F401

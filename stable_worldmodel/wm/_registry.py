@@ -15,6 +15,9 @@ _ENTRIES: dict[str, Any] = {
     "lewm": f"{_P}.lewm.config:LeWMConfig",
     "pldm": f"{_P}.pldm.config:PLDMConfig",
     "dummy": f"{_P}.dummy_config:DummyConfig",
+    "gcbc": f"{_P}.gcrl.config:GCBCConfig",
+    "gcivl": f"{_P}.gcrl.config:GCIVLConfig",
+    "gciql": f"{_P}.gcrl.config:GCIQLConfig",
 }
 
 

@@ -51,6 +51,8 @@ class JEPAConfig:
     model_name: ClassVar[str] = ""
     target: ClassVar[str] = ""
     presets: ClassVar[dict[str, dict[str, Any]]] = {}
+    #: how ``swm eval --policy <prefix>:RUN`` uses a checkpoint: ``wm`` plans with it, ``gc`` acts with it
+    eval_prefix: ClassVar[str] = "wm"
 
     encoder: str = "cnn"
     image_size: int = 64

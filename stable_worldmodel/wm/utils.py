@@ -49,6 +49,12 @@ WEIGHTS_NAME = "weights.pt"
 TARGET_ALIASES = {
     "stable_pretraining.backbone.utils.vit_hf": "stable_worldmodel.wm.encoders.vit_hf",
     "stable_pretraining.backbone.vit_hf": "stable_worldmodel.wm.encoders.vit_hf",
+    # the wrappers upstream's goal-conditioned scripts put around heads and encoders
+    **{
+        f"stable_pretraining.{where}{name}": f"stable_worldmodel.wm.gcrl.module.{name}"
+        for where in ("", "backbone.", "backbone.utils.")
+        for name in ("TeacherStudentWrapper", "EvalOnly")
+    },
 }
 
 

@@ -1,0 +1,97 @@
+"""A ready-to-act policy from a trained goal-conditioned checkpoint (``swm eval --policy gc:RUN``).
+
+``goal_conditioned_policy("tr-gcbc")`` loads ``checkpoints/tr-gcbc`` as ``wm:RUN`` does
+(:func:`~stable_worldmodel.wm.utils.load_checkpoint`: weights, ``config.json``, our
+``protocol.json``) and wires what the run recorded into a
+:class:`~stable_worldmodel.policy.FeedForwardPolicy`: the image preprocessing of ``pixels``
+and ``goal``, and the action normalizer (``inverse_transform`` of the model's actions). The
+model must act through ``get_action(info) -> (B, A)`` (``GCRL``, 0.0.3's ``GCBC``). A model
+trained on action blocks (``frameskip`` k > 1) acts with the first action of its block and
+sees the next frame before acting again. Upstream checkpoints (no ``protocol.json``) act on
+224x224 images with ImageNet statistics and no action normalizer.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import torch
+from torch import nn
+
+from .. import keys
+from ..errors import ConfigError
+from ..policy import FeedForwardPolicy
+from ..wm.config import IMAGENET_MEAN, IMAGENET_STD
+
+__all__ = ["GoalConditionedPolicy", "goal_conditioned_policy"]
+
+
+class _FirstAction(nn.Module):
+    """``model`` acting with the first ``action_dim`` numbers of its ``(B, k * A)`` action blocks."""
+
+    def __init__(self, model: nn.Module, action_dim: int):
+        super().__init__()
+        self.model, self.action_dim = model, int(action_dim)
+
+    def get_action(self, info: dict) -> torch.Tensor:
+        return self.model.get_action(info)[:, : self.action_dim]
+
+
+class GoalConditionedPolicy(FeedForwardPolicy):
+    """:class:`~stable_worldmodel.policy.FeedForwardPolicy` whose actions are clipped to the
+    env's Box bounds and cast to its dtype (a regression head can ask for more than the env takes)."""
+
+    def __init__(self, model: Any, process: dict | None = None, transform: dict | None = None, **kwargs: Any):
+        super().__init__(model, process=process, transform=transform, **kwargs)
+        self.type = "goal_conditioned"
+
+    def get_action(self, info_dict: dict, **kwargs: Any) -> np.ndarray:
+        action = super().get_action(info_dict, **kwargs)
+        space = self._require_env().action_space
+        if isinstance(space, gym.spaces.Box) and action.shape == space.shape:
+            action = np.clip(action, space.low, space.high).astype(space.dtype, copy=False)
+        return action
+
+
+def load_run(run: str, method: str, expects: str, other_prefix: str, device: str = "auto", cache_dir: str | None = None):
+    """``(model in eval mode on its device, protocol, device, process, transform)`` of checkpoint ``run``.
+
+    ``model`` must have ``method`` (``get_cost`` for ``wm:``, ``get_action`` for ``gc:``), else a
+    ConfigError pointing at ``other_prefix``. ``process`` holds the run's action normalizer,
+    ``transform`` its image preprocessing of ``pixels`` and ``goal``, as recorded in
+    ``protocol.json`` (upstream checkpoints: 224x224 images with ImageNet statistics).
+    """
+    from ..train.trainer import resolve_device
+    from ..wm.preprocess import ImageTransform, Normalizer
+    from ..wm.utils import load_checkpoint
+
+    dev = resolve_device(device)
+    model, protocol = load_checkpoint(run, cache_dir)
+    if not callable(getattr(model, method, None)):
+        raise ConfigError(
+            f"{'gc' if other_prefix == 'wm' else 'wm'}:{run} requires {expects}, got a {type(model).__name__}; "
+            f"use --policy {other_prefix}:{run} instead"
+        )
+    model = model.to(dev).eval()
+    process = {}
+    norms = protocol.get("normalizers", {})
+    if keys.ACTION in norms:
+        process[keys.ACTION] = Normalizer.from_dict(norms[keys.ACTION])
+    size = int(protocol.get("image_size", 224))
+    images = ImageTransform(protocol.get("image_mean", IMAGENET_MEAN), protocol.get("image_std", IMAGENET_STD), size)
+    return model, protocol, dev, process, {keys.PIXELS: images, keys.GOAL: images}
+
+
+def goal_conditioned_policy(run: str, *, device: str = "auto", cache_dir: str | None = None) -> tuple[GoalConditionedPolicy, dict[str, Any]]:
+    """``(policy, protocol)`` for checkpoint ``run``; give the World ``protocol["history_size"]`` frames."""
+    model, protocol, dev, process, transform = load_run(
+        run, "get_action", "a goal-conditioned policy checkpoint (gcbc, gcivl, gciql)", "wm", device, cache_dir
+    )
+    block, action_dim = int(protocol.get("frameskip", 1)), protocol.get("action_dim")
+    if block > 1 and action_dim:
+        model = _FirstAction(model, int(action_dim))
+    policy = GoalConditionedPolicy(model, process=process, transform=transform)
+    history = int(protocol.get("history_size", getattr(model, "history_size", 1)))
+    return policy, {**protocol, "device": str(dev), "history_size": history, "action_block": block}
