@@ -40,7 +40,7 @@ def collect(
     variation: VariationOpt = None,
     max_steps: MaxStepsOpt = None,
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing dataset of that name instead of resuming it.")] = False,
-    noise: Annotated[float | None, typer.Option("--noise", min=0.0, metavar="SIGMA", help="Std of the Gaussian noise on the expert's actions (default: 1.0 for experts that take noise, so the data shows what varied actions do; 0 records clean demonstrations).", show_default=False)] = None,
+    noise: Annotated[float | None, typer.Option("--noise", min=0.0, metavar="SIGMA", help="Std of the Gaussian noise on the expert's actions (default: 1.0 times the action bound for experts that take noise, so the data shows what varied actions do; 0 records clean demonstrations).", show_default=False)] = None,
 ) -> None:
     """Record EPISODES episodes of ENV into an HDF5 dataset in the cache, then show it.
 

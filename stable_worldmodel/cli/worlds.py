@@ -83,7 +83,8 @@ def policy_history(name: str) -> int:
 
 
 #: action noise of an expert recording a dataset (``swm collect``), for experts that take
-#: ``noise``: world models learn what actions do only from actions that vary
+#: ``noise``, in units of the env's action bound: world models learn what actions do only from
+#: actions that vary
 COLLECT_NOISE = 1.0
 
 
@@ -99,10 +100,30 @@ def expert_takes_noise(env_id: str) -> bool:
 
 def recording_noise(policy: str, env_id: str, noise: float | None) -> float | None:
     """The expert action noise of a recording: ``noise`` when given, else :data:`COLLECT_NOISE`
-    for an expert that takes noise; ``None`` (no noise) otherwise or when ``noise`` is 0."""
+    times the env's largest action bound (1.0 for actions in [-1, 1], 0.2 for
+    ``swm/SimplePointMaze-v0``'s) for an expert that takes noise; ``None`` (no noise) otherwise
+    or when ``noise`` is 0."""
     if noise is None and policy == "expert" and expert_takes_noise(env_id):
-        noise = COLLECT_NOISE
+        noise = COLLECT_NOISE * _action_bound(env_id)
     return noise or None
+
+
+def _action_bound(env_id: str) -> float:
+    """The largest finite ``|high|`` of the env's Box action space (1.0 when it has none)."""
+    import gymnasium as gym
+    import numpy as np
+
+    env = gym.make(env_id, disable_env_checker=True)
+    try:
+        space = env.action_space
+        if isinstance(space, gym.spaces.Box):
+            bound = np.abs(np.concatenate([space.low.ravel(), space.high.ravel()]))
+            bound = bound[np.isfinite(bound)]
+            if bound.size:
+                return float(bound.max())
+        return 1.0
+    finally:
+        env.close()
 
 
 def make_policy(

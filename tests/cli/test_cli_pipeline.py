@@ -69,6 +69,8 @@ def test_collect_expert_adds_seeded_action_noise_where_the_expert_takes_it(swm):
         result = swm("collect", *room, "--name", name, "--seed", "1", *extra)
         assert result.exit_code == 0, result.output
     assert "(action noise 1)" in swm("collect", *room, "--name", "n2", "--seed", "2").stdout
+    maze = swm("collect", "swm/SimplePointMaze-v0", "--policy", "expert", "-n", "1", "--max-steps", "5", "--image-size", "16")
+    assert "(action noise 0.2)" in maze.stdout  # in units of the action bound (+-0.2 there)
     noisy, clean, half = _actions("noisy"), _actions("clean"), _actions("half")
     np.testing.assert_array_equal(noisy, _actions("again"))  # seeded
     distinct = [len(np.unique(np.round(a, 2), axis=0)) / len(a) for a in (clean, half, noisy)]
