@@ -30,6 +30,17 @@ class SupportsRenderSize(Protocol):
         """Make ``render()`` return frames of ``size`` = (H, W)."""
 
 
+def check_render_size(owner: str, size: Any) -> tuple[int, int]:
+    """``size`` as an ``(H, W)`` pair of positive ints for ``set_render_size``; ConfigError naming ``owner`` otherwise."""
+    try:
+        h, w = (int(s) for s in size)
+    except (TypeError, ValueError) as exc:
+        raise ConfigError(f"{owner} requires render_size (H, W) of positive ints, got {size!r}") from exc
+    if h < 1 or w < 1:
+        raise ConfigError(f"{owner} requires render_size (H, W) of positive ints, got {size!r}")
+    return h, w
+
+
 @runtime_checkable
 class SupportsDatasetReset(Protocol):
     """An env that can start from a state (and goal) recorded in a dataset."""

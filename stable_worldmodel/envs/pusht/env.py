@@ -50,7 +50,7 @@ import numpy as np
 
 from ... import keys
 from ...errors import ConfigError
-from ..base import DatasetResetMixin, flatten_values, apply_variation_options
+from ..base import DatasetResetMixin, apply_variation_options, check_render_size, flatten_values
 from .physics import CONTROL_HZ, SIM_HZ, WINDOW, PushTPhysics, body_state, on_post_solve, set_pose
 from .render import draw_scene
 from .shapes import SHAPES, SYMMETRY, ShapeSpec, angle_error, shape_spec, to_world
@@ -144,13 +144,7 @@ class PushT(DatasetResetMixin, PushTPhysics, gym.Env):
     # -- protocol hooks ---------------------------------------------------------------------
     def set_render_size(self, size: tuple[int, int]) -> None:
         """Make :meth:`render` (and the goal image) ``size`` = (H, W) frames."""
-        try:
-            h, w = (int(s) for s in size)
-        except (TypeError, ValueError) as exc:
-            raise ConfigError(f"PushT requires render_size (H, W) of positive ints, got {size!r}") from exc
-        if h < 1 or w < 1:
-            raise ConfigError(f"PushT requires render_size (H, W) of positive ints, got {size!r}")
-        self.render_size = (h, w)
+        self.render_size = check_render_size("PushT", size)
         self._goal_img = None
 
     def eval_state(self, goal_state: np.ndarray, cur_state: np.ndarray):

@@ -40,7 +40,7 @@ import numpy as np
 
 from ... import keys, spaces
 from ...errors import ConfigError, unknown_name
-from ..base import DatasetResetMixin, flatten_values
+from ..base import DatasetResetMixin, check_render_size, flatten_values
 from .legacy_render import NATIVE, MazeCanvas
 
 WIDTH = HEIGHT = 5.0
@@ -173,13 +173,7 @@ class SimplePointMazeV0Env(DatasetResetMixin, gym.Env):
 
     # -- protocol hooks ---------------------------------------------------------------------
     def set_render_size(self, size: tuple[int, int]) -> None:
-        try:
-            h, w = (int(s) for s in size)
-        except (TypeError, ValueError) as exc:
-            raise ConfigError(f"SimplePointMazeV0Env requires render_size (H, W) of positive ints, got {size!r}") from exc
-        if h < 1 or w < 1:
-            raise ConfigError(f"SimplePointMazeV0Env requires render_size (H, W) of positive ints, got {size!r}")
-        self.render_size = (h, w)
+        self.render_size = check_render_size("SimplePointMazeV0Env", size)
         self._goal_img = None
 
     def eval_state(self, goal_state: np.ndarray, cur_state: np.ndarray) -> tuple[bool, float]:

@@ -40,7 +40,7 @@ import pymunk
 
 from ... import keys, spaces
 from ...errors import ConfigError
-from ..base import DatasetResetMixin, apply_variation_options
+from ..base import DatasetResetMixin, apply_variation_options, check_render_size
 from .legacy_overlap import overlap_fractions
 from .legacy_render import CANVAS, draw_frame
 
@@ -194,13 +194,7 @@ class TwoRoomV0Env(DatasetResetMixin, gym.Env):
 
     # -- protocol hooks ---------------------------------------------------------------------
     def set_render_size(self, size: tuple[int, int]) -> None:
-        try:
-            h, w = (int(s) for s in size)
-        except (TypeError, ValueError) as exc:
-            raise ConfigError(f"TwoRoomV0Env requires render_size (H, W) of positive ints, got {size!r}") from exc
-        if h < 1 or w < 1:
-            raise ConfigError(f"TwoRoomV0Env requires render_size (H, W) of positive ints, got {size!r}")
-        self.render_size = (h, w)
+        self.render_size = check_render_size("TwoRoomV0Env", size)
         self._goal_img = None
 
     def eval_state(self, goal_state: np.ndarray, cur_state: np.ndarray) -> tuple[bool, float]:
