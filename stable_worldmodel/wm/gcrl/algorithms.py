@@ -145,13 +145,18 @@ def gcbc_loss(model: GCRL, batch: dict) -> dict:
     return {"loss": action_loss, "action_loss": action_loss, "emb": info["pixels_embed"]}
 
 
-def gcivl_loss(model: GCRL, batch: dict) -> dict:
-    """Implicit V-learning (expectile TD on V alone) plus the advantage-weighted actor."""
+def _td_inputs(model: GCRL, batch: dict):
+    """What both value-based losses start from: ``(h, info, obs, next obs, goal)`` embeddings, targets updated."""
     h = _frames(model, batch, 1)
     _update_targets(model)
     info = _encode(model, batch, GOAL_PIXELS)
     emb, goal = info["embed"], info["goal_embed"].flatten(1, 2)
-    obs, nxt = emb[:, :h].flatten(1, 2), emb[:, 1 : h + 1].flatten(1, 2)
+    return h, info, emb[:, :h].flatten(1, 2), emb[:, 1 : h + 1].flatten(1, 2), goal
+
+
+def gcivl_loss(model: GCRL, batch: dict) -> dict:
+    """Implicit V-learning (expectile TD on V alone) plus the advantage-weighted actor."""
+    h, info, obs, nxt, goal = _td_inputs(model, batch)
     value = _student(model.value_predictor)(obs, goal)
     with torch.no_grad():
         mask = _not_at_goal(model, batch, h)
@@ -169,11 +174,7 @@ def gcivl_loss(model: GCRL, batch: dict) -> dict:
 
 def gciql_loss(model: GCRL, batch: dict) -> dict:
     """Implicit Q-learning (expectile V towards the target critic, TD critic) plus the advantage-weighted actor."""
-    h = _frames(model, batch, 1)
-    _update_targets(model)
-    info = _encode(model, batch, GOAL_PIXELS)
-    emb, goal = info["embed"], info["goal_embed"].flatten(1, 2)
-    obs, nxt = emb[:, :h].flatten(1, 2), emb[:, 1 : h + 1].flatten(1, 2)
+    h, info, obs, nxt, goal = _td_inputs(model, batch)
     action = _action(batch, h)
     value = _student(model.value_predictor)(obs, goal)
     with torch.no_grad():
