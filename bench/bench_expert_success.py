@@ -13,7 +13,8 @@ import stable_worldmodel as swm
 
 # the acceptance targets of the env issue (episode limits as registered)
 TARGETS = {
-    "swm/TwoRoom-v1": 95,
+    "swm/TwoRoom-v1": None,
+    "swm/TwoRoom-v2": 95,
     "swm/SimplePointMaze-v1": 90,
     "swm/VoidRun-v0": 80,
     "swm/PushT-v1": 60,

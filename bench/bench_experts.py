@@ -1,4 +1,4 @@
-"""Expert success rates and env speed for ``swm/TwoRoom-v1`` and ``swm/SimplePointMaze-v1``.
+"""Expert success rates and env speed for ``swm/TwoRoom-v2`` and ``swm/SimplePointMaze-v1``.
 
 For each env, with the default factors and with ``{"variation": ["all"]}``:
 
@@ -21,7 +21,7 @@ import numpy as np
 import stable_worldmodel as swm
 from stable_worldmodel import keys
 
-ENVS = {"swm/TwoRoom-v1": 100, "swm/SimplePointMaze-v1": 150}  # env id -> max_episode_steps
+ENVS = {"swm/TwoRoom-v2": 100, "swm/SimplePointMaze-v1": 150}  # env id -> max_episode_steps
 OPTIONS = (("default", None), ("variation=all", {"variation": ["all"]}))
 
 

@@ -124,7 +124,7 @@ def bench_policy(args) -> None:
     n, steps = 4, (20 if args.quick else 100)
     config = PlanConfig(horizon=5, receding_horizon=5, action_block=5)
     solver = CEMSolver(PointCost(), num_samples=300, n_steps=30, topk=30)
-    with World("swm/TwoRoom-v1", num_envs=n, image_shape=(64, 64), max_episode_steps=1000, verbose=0) as world:
+    with World("swm/TwoRoom-v2", num_envs=n, image_shape=(64, 64), max_episode_steps=1000, verbose=0) as world:
         world.set_policy(WorldModelPolicy(solver, config))
         world.reset(seed=0)
         world.step()

@@ -120,5 +120,5 @@ def test_transformable_protocol():
 
 
 def test_unknown_expert_env():
-    with pytest.raises(KeyError, match="swm/TwoRoom-v1"):
+    with pytest.raises(KeyError, match="swm/TwoRoom-v2"):
         swm.envs.expert_policy("swm/TwoRom-v1")

@@ -25,7 +25,7 @@ from .errors import int_in, output_dir
 from .pipeline import ImageSizeOpt, MaxStepsOpt, SeedOpt, default_dataset_name
 from .stats import SuccessSummary
 
-DEFAULT_ENV = "swm/TwoRoom-v1"
+DEFAULT_ENV = "swm/TwoRoom-v2"
 DEFAULT_OUT = Path("demo_outputs")
 POLICY_ORDER = ("random", "expert")
 PLOT_NAME = "success_rates.png"
@@ -110,7 +110,7 @@ def demo(
     """Collect expert data, train a world model on it, evaluate random vs expert vs the model
     planning with CEM, and write videos, a plot and results.json.
 
-    Example: swm demo --env swm/TwoRoom-v1 --episodes 300 --out demo_outputs
+    Example: swm demo --env swm/TwoRoom-v2 --episodes 300 --out demo_outputs
     """
     from ..data import dataset_info, delete_dataset
     from ..data.utils import resolve_dataset_path

@@ -9,7 +9,7 @@ import typer
 
 from .errors import int_in, output_dir, output_file, require
 
-EnvArg = Annotated[str, typer.Argument(help="Environment id, e.g. swm/TwoRoom-v1 (see `swm envs`).", metavar="ENV", show_default=False)]
+EnvArg = Annotated[str, typer.Argument(help="Environment id, e.g. swm/TwoRoom-v2 (see `swm envs`).", metavar="ENV", show_default=False)]
 PolicyOpt = Annotated[str, typer.Option("--policy", "-p", metavar="POLICY", help="Policy that acts: random or expert.")]
 NumEnvsOpt = Annotated[int, typer.Option("--num-envs", parser=int_in(1), metavar="K", help="Environments stepped together.")]
 ImageSizeOpt = Annotated[int, typer.Option("--image-size", parser=int_in(8, 1024), metavar="S", help="Side of the square images (pixels).")]
@@ -25,7 +25,7 @@ VariationOpt = Annotated[
 
 
 def default_dataset_name(env_id: str, policy: str) -> str:
-    """``swm/TwoRoom-v1`` + ``expert`` -> ``tworoom-v1-expert``."""
+    """``swm/TwoRoom-v2`` + ``expert`` -> ``tworoom-v1-expert``."""
     return f"{env_id.rsplit('/', 1)[-1].lower()}-{policy}"
 
 
@@ -44,7 +44,7 @@ def collect(
 ) -> None:
     """Record EPISODES episodes of ENV into an HDF5 dataset in the cache, then show it.
 
-    Example: swm collect swm/TwoRoom-v1 --episodes 20 --policy expert --name tworoom
+    Example: swm collect swm/TwoRoom-v2 --episodes 20 --policy expert --name tworoom
     """
     from ..data import dataset_info, delete_dataset
     from ..data._index import not_a_file
@@ -101,7 +101,7 @@ def eval_cmd(
 ) -> None:
     """Evaluate a policy on ENV and print its success rate with a 95% confidence interval.
 
-    Example: swm eval swm/TwoRoom-v1 --policy wm:tr-lewm --solver cem --episodes 50 --num-envs 10 --json out.json
+    Example: swm eval swm/TwoRoom-v2 --policy wm:tr-lewm --solver cem --episodes 50 --num-envs 10 --json out.json
     (or --policy gc:tr-gcbc for a policy trained with `swm train gcbc`)
     """
     from .display import console, success_table
@@ -171,7 +171,7 @@ def envs(tag: Annotated[str | None, typer.Option("--tag", metavar="TAG", help="O
 def fovs(env: EnvArg) -> None:
     """Show the factors of variation of ENV: type, range, shape and default of each.
 
-    Example: swm fovs swm/TwoRoom-v1
+    Example: swm fovs swm/TwoRoom-v2
     """
     from .display import console, factor_tree
     from .worlds import resolve_env, variation_space_of

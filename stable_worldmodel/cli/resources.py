@@ -202,7 +202,7 @@ def show(
     """Show the files, model class, parameter count and training protocol of models, the columns,
     counts, shapes and factors of datasets, or the spaces and factors of worlds.
 
-    Example: swm show model pusht-lewm; swm show dataset tworoom-v1-expert; swm show world swm/TwoRoom-v1
+    Example: swm show model pusht-lewm; swm show dataset tworoom-v1-expert; swm show world swm/TwoRoom-v2
     """
     from ..data import dataset_info, world_info
     from .display import display_dataset_info, display_model_info, display_world_info

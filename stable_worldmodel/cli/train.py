@@ -38,7 +38,7 @@ def train_cmd(
     """Train MODEL on a recorded dataset; the checkpoint goes to $STABLEWM_HOME/checkpoints/RUN.
 
     Example: swm train lewm --dataset tworoom --preset tiny --name tr-lewm
-    (then: swm eval swm/TwoRoom-v1 --policy wm:tr-lewm; a gcbc / gcivl / gciql run: --policy gc:RUN)
+    (then: swm eval swm/TwoRoom-v2 --policy wm:tr-lewm; a gcbc / gcivl / gciql run: --policy gc:RUN)
     """
     import sys
 

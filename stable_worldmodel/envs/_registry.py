@@ -31,7 +31,7 @@ WORLDS: set[str] = set()  # 0.0.3's name: every id registered through us (kept i
 
 _P = "stable_worldmodel.envs"
 #: ids whose older version is a supported design of its own (upstream's), not an outdated one
-SIDE_BY_SIDE = r"swm/(PushT(-Discrete)?-v1|TwoRoom-v0|SimplePointMaze-v0)"
+SIDE_BY_SIDE = r"swm/(PushT(-Discrete)?-v1|TwoRoom-v[01]|SimplePointMaze-v0)"
 BUILTIN: tuple[EnvEntry, ...] = (
     EnvEntry("swm/Toy-v0", f"{_P}.toy.env:ToyEnv", ("toy", "continuous"), f"{_P}.toy.env:ToyExpert", max_episode_steps=100),
     EnvEntry("swm/PushT-v1", f"{_P}.pusht.v1:PushTV1", ("paper", "continuous", "pymunk"), f"{_P}.pusht.v1_expert:PushTV1Expert", max_episode_steps=300),
@@ -50,7 +50,9 @@ BUILTIN: tuple[EnvEntry, ...] = (
         f"{_P}.pusht.expert:PushTDiscreteExpert",
         max_episode_steps=300,
     ),
-    EnvEntry("swm/TwoRoom-v1", f"{_P}.two_room.env:TwoRoomEnv", ("paper", "continuous"), f"{_P}.two_room.expert:TwoRoomExpert", max_episode_steps=100),
+    # upstream 0.1.1's TwoRoom: no episode limit of its own, as upstream (swm tools cut at 100 steps)
+    EnvEntry("swm/TwoRoom-v1", f"{_P}.two_room.v1:TwoRoomV1Env", ("paper", "continuous"), f"{_P}.two_room.v1_expert:TwoRoomV1Expert"),
+    EnvEntry("swm/TwoRoom-v2", f"{_P}.two_room.env:TwoRoomEnv", ("continuous",), f"{_P}.two_room.expert:TwoRoomExpert", max_episode_steps=100),
     EnvEntry("swm/TwoRoom-v0", f"{_P}.two_room.legacy:TwoRoomV0Env", ("continuous", "pymunk"), f"{_P}.two_room.legacy_expert:TwoRoomV0Expert"),
     EnvEntry(
         "swm/SimplePointMaze-v0",
@@ -106,7 +108,7 @@ def register_all() -> None:
             max_episode_steps=entry.max_episode_steps,
         )
     # swm/PushT-v1 (upstream 0.1.1's behaviour) and swm/PushT-v2 (our design), TwoRoom-v0 (0.0.3's)
-    # and v1, SimplePointMaze-v0 (0.1.1's) and v1 (ours) are supported side by side: silence
+    # and v1 (upstream 0.1.1's) and v2 (ours), SimplePointMaze-v0 (0.1.1's) and v1 (ours) are supported side by side: silence
     # Gymnasium's "out of date" notice for them (after Gymnasium's import, whose own
     # DeprecationWarning filter would otherwise come first).
     warnings.filterwarnings("ignore", rf".*The environment {SIDE_BY_SIDE} is out of date", DeprecationWarning)

@@ -83,7 +83,7 @@ def test_demo_random_and_expert_share_seeds(swm, tmp_path):
 def test_demo_bad_env_is_one_line(swm, error_line, tmp_path):
     result = swm("demo", "--env", "swm/TwoRom-v1", "--out", str(tmp_path / "d"))
     assert result.exit_code == 1
-    assert "swm/TwoRoom-v1" in error_line(result)
+    assert "swm/TwoRoom-v2" in error_line(result)
     assert not (tmp_path / "d").exists()
 
 

@@ -64,7 +64,7 @@ def _actions(name: str) -> np.ndarray:
 
 
 def test_collect_expert_adds_seeded_action_noise_where_the_expert_takes_it(swm):
-    room = ("swm/TwoRoom-v1", "--policy", "expert", "-n", "4", "--num-envs", "2", *SMALL)
+    room = ("swm/TwoRoom-v2", "--policy", "expert", "-n", "4", "--num-envs", "2", *SMALL)
     for name, extra in (("noisy", ()), ("again", ()), ("clean", ("--noise", "0")), ("half", ("--noise", "0.5"))):
         result = swm("collect", *room, "--name", name, "--seed", "1", *extra)
         assert result.exit_code == 0, result.output
@@ -162,7 +162,7 @@ def test_eval_unknown_env_suggests(swm, error_line):
     result = swm("eval", "TwoRoom")
     assert result.exit_code == 1
     line = error_line(result)
-    assert "Did you mean" in line and "'swm/TwoRoom-v1'" in line
+    assert "Did you mean" in line and "'swm/TwoRoom-v2'" in line
 
 
 # -- envs / fovs ---------------------------------------------------------------------------

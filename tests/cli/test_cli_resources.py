@@ -71,7 +71,7 @@ def test_list_models_both_layouts(swm, two_models, checkpoint):
 def test_list_worlds(swm):
     result = swm("list", "world")
     assert result.exit_code == 0
-    for env_id in ("swm/Toy-v0", "swm/TwoRoom-v1", "swm/PushT-v1"):
+    for env_id in ("swm/Toy-v0", "swm/TwoRoom-v2", "swm/PushT-v1"):
         assert env_id in result.stdout
 
 
@@ -131,7 +131,7 @@ def test_show_unknown_dataset_suggests(swm, error_line, two_datasets):
 def test_show_unknown_world_and_kind(swm, error_line):
     result = swm("show", "world", "swm/TwoRom-v1")
     assert result.exit_code == 1
-    assert "swm/TwoRoom-v1" in error_line(result)
+    assert "swm/TwoRoom-v2" in error_line(result)
     result = swm("show", "solver", "x")
     assert result.exit_code == 1
     line = error_line(result)

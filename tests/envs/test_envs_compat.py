@@ -12,7 +12,7 @@ from stable_worldmodel.errors import ConfigError, UnknownNameError
 
 
 def test_register_and_worlds_as_in_0_0_3():
-    assert "swm/PushT-v1" in swm.envs.WORLDS and "swm/TwoRoom-v1" in swm.envs.WORLDS
+    assert "swm/PushT-v1" in swm.envs.WORLDS and "swm/TwoRoom-v2" in swm.envs.WORLDS
     swm.envs.register(id="swm/CompatToy-v0", entry_point="stable_worldmodel.envs.toy.env:ToyEnv")
     assert "swm/CompatToy-v0" in swm.envs.WORLDS and "swm/CompatToy-v0" in gym.registry
     world = swm.World("swm/CompatToy-v0", num_envs=1, image_shape=(8, 8), max_episode_steps=3, verbose=0)
@@ -61,8 +61,8 @@ def test_weak_policy_is_seeded_and_checks_its_env():
 
     with pytest.raises(ConfigError, match="dist_constraint"):
         WeakPolicy(dist_constraint=0)
-    world = swm.World("swm/TwoRoom-v1", num_envs=1, image_shape=(8, 8), verbose=0)
-    with pytest.raises(ConfigError, match="requires a PushT environment, got 'swm/TwoRoom-v1'"):
+    world = swm.World("swm/TwoRoom-v2", num_envs=1, image_shape=(8, 8), verbose=0)
+    with pytest.raises(ConfigError, match="requires a PushT environment, got 'swm/TwoRoom-v2'"):
         world.set_policy(WeakPolicy())
     runs = []
     for _ in range(2):
@@ -75,7 +75,7 @@ def test_weak_policy_is_seeded_and_checks_its_env():
 def test_two_room_expert_policy_under_its_upstream_name():
     from stable_worldmodel.envs.two_room import ExpertPolicy
 
-    world = swm.World("swm/TwoRoom-v1", num_envs=4, image_shape=(8, 8), max_episode_steps=100, verbose=0)
+    world = swm.World("swm/TwoRoom-v2", num_envs=4, image_shape=(8, 8), max_episode_steps=100, verbose=0)
     world.set_policy(ExpertPolicy(seed=0))
     assert world.evaluate(episodes=4, seed=0)["success_rate"] == 100.0
     sticky = ExpertPolicy(action_noise=0.5, action_repeat_prob=1.0, seed=0)

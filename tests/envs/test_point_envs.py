@@ -1,4 +1,4 @@
-"""The env contract shared by ``swm/TwoRoom-v1`` and ``swm/SimplePointMaze-v1`` (both built on ``PointEnv``).
+"""The env contract shared by ``swm/TwoRoom-v2`` and ``swm/SimplePointMaze-v1`` (both built on ``PointEnv``).
 
 Env-specific rules (walls, doors, maze, dynamics, success distances) are tested in
 ``test_two_room.py`` and ``test_simple_point_maze.py``.
@@ -21,7 +21,7 @@ from stable_worldmodel import keys
 
 pytest.importorskip("cv2")
 
-TWO_ROOM, MAZE = "swm/TwoRoom-v1", "swm/SimplePointMaze-v1"
+TWO_ROOM, MAZE = "swm/TwoRoom-v2", "swm/SimplePointMaze-v1"
 # Per env: fixed start/goal, an action sequence, and one non-default value per factor
 # (the test below fails when a factor is added without one).
 CASES = {
@@ -119,7 +119,7 @@ def test_every_factor_has_a_test_value(env_id):
 @pytest.mark.parametrize("env_id,name", FACTORS)
 def test_every_factor_changes_the_episode(env_id, name):
     # TwoRoom draws the goal disk only with render_target=True (its default hides it)
-    shows_goal = {"render_target": True} if env_id == "swm/TwoRoom-v1" and name.startswith("goal.") else {}
+    shows_goal = {"render_target": True} if env_id == "swm/TwoRoom-v2" and name.startswith("goal.") else {}
     env, case = make(env_id, **shows_goal), CASES[env_id]
     frames, states = rollout(env, env_id, options={"variation_values": case["base"]})
     values = {**case["base"], name: case["alternatives"][name]}
@@ -195,11 +195,11 @@ def test_package_exports_lazily_without_cv2(module, names):
 
 
 def test_two_room_hides_the_goal_and_its_goal_image_is_the_frame_at_the_goal():
-    env = make("swm/TwoRoom-v1")
+    env = make("swm/TwoRoom-v2")
     obs, info = env.reset(seed=3)
-    shown = make("swm/TwoRoom-v1", render_target=True)
+    shown = make("swm/TwoRoom-v2", render_target=True)
     shown.reset(seed=3)
     assert not np.array_equal(env.render(), shown.render())  # the goal disk is drawn only when asked
-    at_goal = make("swm/TwoRoom-v1")
+    at_goal = make("swm/TwoRoom-v2")
     at_goal.reset(seed=3, options={"state": info[keys.GOAL_STATE]})
     np.testing.assert_array_equal(at_goal.render(), info[keys.GOAL])

@@ -21,7 +21,7 @@ ENVS = list_envs()
 
 
 def test_registry_lists_the_seed_envs():
-    for env_id in ("swm/PushT-v1", "swm/PushT-Discrete-v1", "swm/TwoRoom-v1", "swm/SimplePointMaze-v0",
+    for env_id in ("swm/PushT-v1", "swm/PushT-Discrete-v1", "swm/TwoRoom-v2", "swm/SimplePointMaze-v0",
                    "swm/ImagePositioning-v1", "swm/VoidRun-v0"):
         assert env_id in ENVS and env_id in gym.registry
         assert isinstance(gym.registry[env_id].entry_point, str)  # nothing imported to register

@@ -1,4 +1,4 @@
-"""Tests of ``swm/TwoRoom-v1``: layout, walls and doors, success rule, state restore and the expert.
+"""Tests of ``swm/TwoRoom-v2``: layout, walls and doors, success rule, state restore and the expert.
 
 The contract shared with SimplePointMaze (check_env, determinism, factors, rendering, World) is in
 ``test_point_envs.py``.

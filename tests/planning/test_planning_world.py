@@ -62,7 +62,7 @@ def test_toy_goals_are_reached_by_planning():
 
 
 class TwoRoomDynamics(torch.nn.Module):
-    """Ground truth of swm/TwoRoom-v1 at its default factors, in torch.
+    """Ground truth of swm/TwoRoom-v2 at its default factors, in torch.
 
     Steps the agent (radius 2, speed 2) with the border and the wall (passable only in a
     door gap) and scores each plan by the path length to the goal through the nearest door.
@@ -103,7 +103,7 @@ class TwoRoomDynamics(torch.nn.Module):
 def test_two_room_goal_reached_with_ground_truth_dynamics():
     config = PlanConfig(horizon=5, receding_horizon=1, action_block=2)
     solver = CEMSolver(TwoRoomDynamics(), num_samples=64, n_steps=6, topk=8)
-    with World("swm/TwoRoom-v1", num_envs=4, image_shape=(16, 16), max_episode_steps=80, verbose=0,
+    with World("swm/TwoRoom-v2", num_envs=4, image_shape=(16, 16), max_episode_steps=80, verbose=0,
                vectorization_mode="sync") as world:
         world.set_policy(WorldModelPolicy(solver, config))
         result = world.evaluate(episodes=4, seed=3)

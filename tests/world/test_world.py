@@ -282,8 +282,8 @@ def test_evaluate_with_a_seed_repeats_exactly_on_the_same_world_and_policy(polic
         world = make(2, max_episode_steps=8)
         world.set_policy(RandomPolicy(seed=1))
     else:
-        world = swm.World("swm/TwoRoom-v1", num_envs=2, image_shape=(16, 16), max_episode_steps=8, verbose=0)
-        world.set_policy(swm.envs.expert_policy("swm/TwoRoom-v1", noise=2.0, seed=0))
+        world = swm.World("swm/TwoRoom-v2", num_envs=2, image_shape=(16, 16), max_episode_steps=8, verbose=0)
+        world.set_policy(swm.envs.expert_policy("swm/TwoRoom-v2", noise=2.0, seed=0))
     first = world.evaluate(episodes=3, seed=5, eval_keys=[keys.STATE])
     world.evaluate(episodes=2)  # moves the policy's stream on
     again = world.evaluate(episodes=3, seed=5, eval_keys=[keys.STATE])

@@ -1,4 +1,4 @@
-"""``swm/TwoRoom-v1``: point navigation between two rooms joined by door(s) (the "Wall" task of DINO-WM and PLDM).
+"""``swm/TwoRoom-v2``: point navigation between two rooms joined by door(s) (the "Wall" task of DINO-WM and PLDM).
 
 World (units, y down as in images): a ``64 x 64`` square framed by a border of thickness 2,
 split by a vertical wall (centre ``wall.position``, thickness ``wall.thickness``) with

@@ -1,4 +1,4 @@
-"""Scripted expert of ``swm/TwoRoom-v1``: straight to the goal, through the best door when it is in the other room."""
+"""Scripted expert of ``swm/TwoRoom-v2``: straight to the goal, through the best door when it is in the other room."""
 
 from __future__ import annotations
 
@@ -7,14 +7,14 @@ from typing import Any
 import numpy as np
 
 from ... import keys
-from ...policy import ExpertPolicy
+from ...policy import ExpertPolicy as ScriptedExpert
 from .env import MAX_DOORS, RADIUS_RANGE, SPEED_RANGE
 
 _R = RADIUS_RANGE[1]  # the expert does not see the radius: it plans for the largest one
 _MARGIN = 0.25
 
 
-class TwoRoomExpert(ExpertPolicy):
+class TwoRoomExpert(ScriptedExpert):
     """Batched door-seeking controller reading the layout from the state (no privileged access).
 
     From ``infos[state][:, -1]`` (B, 10) and ``infos[goal_state][:, -1]`` (B, 10): when the
@@ -25,7 +25,7 @@ class TwoRoomExpert(ExpertPolicy):
     Returns actions (B, 2) in ``[-1, 1]``.
     """
 
-    def __init__(self, env_id: str = "swm/TwoRoom-v1", noise: float = 0.0, seed: int | None = None, **kwargs: Any):
+    def __init__(self, env_id: str = "swm/TwoRoom-v2", noise: float = 0.0, seed: int | None = None, **kwargs: Any):
         super().__init__(env_id=env_id, noise=noise, seed=seed, **kwargs)
         self.rng = np.random.default_rng(seed)
 
@@ -57,13 +57,36 @@ class TwoRoomExpert(ExpertPolicy):
         return np.array([wall_x - side * clear, centre_y])  # line up in front of the door
 
 
-class ExpertPolicy(TwoRoomExpert):
-    """:class:`TwoRoomExpert` under the name and arguments of 0.0.3 / 0.1.1's ``envs.two_room.ExpertPolicy``.
+def _controller_for(env: Any) -> type[ScriptedExpert]:
+    """The scripted controller of the TwoRoom that ``env`` (a vectorized env, or one env) holds."""
+    from .legacy import TwoRoomV0Env
+    from .v1 import TwoRoomV1Env
+
+    first = getattr(env, "envs", None)
+    base = getattr(first[0] if first else env, "unwrapped", None)
+    if isinstance(base, TwoRoomV1Env):
+        from .v1_expert import TwoRoomV1Expert
+
+        return TwoRoomV1Expert
+    if isinstance(base, TwoRoomV0Env):
+        from .legacy_expert import TwoRoomV0Expert
+
+        return TwoRoomV0Expert
+    return TwoRoomExpert
+
+
+class ExpertPolicy(ScriptedExpert):
+    """The scripted expert of any TwoRoom under the name and arguments of 0.0.3 / 0.1.1's
+    ``envs.two_room.ExpertPolicy``: it drives the controller of the env it is set on
+    (:class:`~.v1_expert.TwoRoomV1Expert` on ``swm/TwoRoom-v1``, upstream's env;
+    :class:`~.legacy_expert.TwoRoomV0Expert` on ``swm/TwoRoom-v0``; :class:`TwoRoomExpert` on
+    ``swm/TwoRoom-v2`` and before ``set_env``).
 
     ``action_noise`` is the std of the Gaussian action noise; with probability
     ``action_repeat_prob`` an env repeats its previous action (a sticky-action collector).
-    ``door_fit_margin`` and ``door_reach_tol`` tune upstream's door approach and are kept as
-    attributes only: this controller lines up with the door from the state's door geometry.
+    ``door_fit_margin`` (a door fits when its half-extent is that many agent radii) and
+    ``door_reach_tol`` (px from the door centre at which the agent turns to the target) tune
+    the approach on ``swm/TwoRoom-v1``; the other TwoRoom controllers keep them as attributes.
     """
 
     def __init__(
@@ -79,21 +102,44 @@ class ExpertPolicy(TwoRoomExpert):
 
         if not 0.0 <= float(action_repeat_prob) <= 1.0:
             raise ConfigError(f"ExpertPolicy requires action_repeat_prob in [0, 1], got {action_repeat_prob!r}")
-        kwargs.setdefault("env_id", "swm/TwoRoom-v1")
-        super().__init__(noise=float(action_noise), seed=seed, **kwargs)
+        super().__init__(seed=seed, **kwargs)
         self.action_noise = float(action_noise)
         self.action_repeat_prob = float(action_repeat_prob)
         self.door_fit_margin = float(door_fit_margin)
         self.door_reach_tol = door_reach_tol
+        self._controller: ScriptedExpert = self._make(TwoRoomExpert)
+        self.rng = self._repeat_rng(seed)
         self._last: np.ndarray | None = None
+
+    @staticmethod
+    def _repeat_rng(seed: int | None) -> np.random.Generator:
+        """The stream of the sticky-action draws (apart from the controller's noise stream)."""
+        return np.random.default_rng(None if seed is None else (int(seed), 1))
+
+    def _make(self, cls: type[ScriptedExpert]) -> ScriptedExpert:
+        controller = cls(noise=self.action_noise, seed=getattr(self, "seed", None))
+        if hasattr(controller, "door_fit"):
+            controller.door_fit = self.door_fit_margin
+            if self.door_reach_tol is not None:
+                controller.door_reached = float(self.door_reach_tol)
+        return controller
+
+    def set_env(self, env: Any) -> None:
+        super().set_env(env)
+        cls = _controller_for(env)
+        if type(self._controller) is not cls:
+            self._controller = self._make(cls)
+        self._controller.set_env(env)
 
     def set_seed(self, seed: int | None) -> None:
         super().set_seed(seed)
-        self.rng = np.random.default_rng(seed)
+        if seed is not None:
+            self.rng = self._repeat_rng(seed)
+            self._controller.set_seed(seed)
         self._last = None
 
     def get_action(self, infos: dict[str, np.ndarray], **kwargs: Any) -> np.ndarray:
-        action = super().get_action(infos, **kwargs)
+        action = self._controller.get_action(infos, **kwargs)
         if self.action_repeat_prob > 0 and self._last is not None and self._last.shape == action.shape:
             repeat = self.rng.random(len(action)) < self.action_repeat_prob
             action[repeat] = self._last[repeat]
@@ -102,4 +148,3 @@ class ExpertPolicy(TwoRoomExpert):
 
 
 __all__ = ["ExpertPolicy", "TwoRoomExpert"]
-

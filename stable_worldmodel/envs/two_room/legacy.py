@@ -1,6 +1,6 @@
 """``swm/TwoRoom-v0``: the TwoRoom of release 0.0.3 (pymunk physics), kept so its datasets transfer.
 
-``swm/TwoRoom-v1`` is our redesigned task; this module reproduces 0.0.3's ``TwoRoomEnv`` from
+``swm/TwoRoom-v2`` is our redesigned task; this module reproduces 0.0.3's ``TwoRoomEnv`` from
 its observed behaviour (same pymunk world, same step, same observation and info):
 
 - **World**: a 512 x 512 canvas (pixel units, y down). A border of four 9-px-thick static
