@@ -81,6 +81,26 @@ class DatasetResetMixin:
         return options
 
 
+def check_variation_option(options: Mapping[str, Any] | None, names: list[str] | None = None) -> list[str] | None:
+    """The factor names of reset option ``"variation"`` as a list (None when absent or empty).
+
+    A bare string is refused (``["agent.color"]`` was meant); with ``names`` (the space's
+    factor names), unknown names get a "did you mean" error.
+    """
+    requested = (options or {}).get(keys.VARIATION)
+    if not requested:
+        return None
+    if isinstance(requested, str):
+        raise ConfigError(
+            f"reset option 'variation' requires a list of factor names, got the string {requested!r}; write [{requested!r}]"
+        )
+    requested = list(requested)
+    for name in requested if names is not None else ():
+        if name != "all" and name not in names and not any(n.startswith(name + ".") for n in names):
+            raise unknown_name("variation factor", name, ["all", *names])
+    return requested
+
+
 def apply_variation_options(variation_space, options: Mapping[str, Any] | None, np_random: np.random.Generator):
     """Reset ``variation_space`` to its defaults, then resample / set what ``options`` names.
 
@@ -91,17 +111,8 @@ def apply_variation_options(variation_space, options: Mapping[str, Any] | None, 
     if not options:
         return variation_space.value
     names = variation_space.names()
-    requested = options.get(keys.VARIATION)
+    requested = check_variation_option(options, names)
     if requested:
-        if isinstance(requested, str):
-            raise ConfigError(
-                f"reset option 'variation' requires a list of factor names, got the string {requested!r}; "
-                f"write [{requested!r}]"
-            )
-        requested = list(requested)
-        for name in requested:
-            if name != "all" and name not in names and not any(n.startswith(name + ".") for n in names):
-                raise unknown_name("variation factor", name, ["all", *names])
         variation_space.seed(int(np_random.integers(0, 2**31 - 1)))
         variation_space.update(set(requested))
     values = options.get(keys.VARIATION_VALUES)

@@ -86,6 +86,37 @@ def test_pusht_render_goal_factor_of_upstream():
     assert goal_pixels(1) > 20 and goal_pixels(0) == 0
 
 
+# upstream 0.1.1's gym.make("swm/PushT-v1").reset(seed=s): (obs["state"], info["goal_state"]) rounded to 1e-4
+UP_SEEDED_RESETS = {
+    0: ([235.7827, 303.6074, 383.7718, 318.036, 4.9695, 0.0, 0.0], [449.7421, 228.0397, 151.3813, 309.2775, 0.2837, 0.0, 0.0]),
+    3: ([138.4352, 362.7003, 130.6711, 234.4672, 1.4122, 0.0, 0.0], [352.3057, 98.8365, 346.6426, 163.293, 5.061, 0.0, 0.0]),
+}
+
+
+@pytest.mark.parametrize("seed", sorted(UP_SEEDED_RESETS))
+def test_pusht_v1_seed_draws_upstream_start_and_goal(seed):
+    obs, info = gym.make("swm/PushT-v1", disable_env_checker=True).reset(seed=seed)
+    state, goal = UP_SEEDED_RESETS[seed]
+    np.testing.assert_allclose(obs[keys.STATE], state, atol=1e-4)
+    np.testing.assert_allclose(info[keys.GOAL_STATE], goal, atol=1e-4)
+
+
+def test_pusht_v1_all_factors_drawn_as_upstream():
+    env = gym.make("swm/PushT-v1", disable_env_checker=True)
+    obs, _ = env.reset(seed=7, options={"variation": ["all"]})
+    vs = env.unwrapped.variation_space
+    assert vs["agent"]["color"].value.tolist() == [229, 204, 43] and int(vs["block"]["shape"].value) == 3
+    np.testing.assert_allclose(obs[keys.STATE], [176.2336, 116.8658, 390.8437, 302.4224, 5.9023, 186.3105, 323.2808], atol=1e-4)
+
+
+def test_pusht_v1_unseeded_reset_follows_the_env_seed():
+    """Deliberate fix: upstream reseeds the factors from fresh entropy on reset() without a seed."""
+    a, b = (gym.make("swm/PushT-v1", disable_env_checker=True) for _ in range(2))
+    a.reset(seed=5)
+    b.reset(seed=5)
+    np.testing.assert_array_equal(a.reset()[0][keys.STATE], b.reset()[0][keys.STATE])
+
+
 # -- TwoRoom-v0 (release 0.0.3) ---------------------------------------------------------------------
 V0_FACTORS = {  # name: default of 0.0.3
     "agent.color": [255, 0, 0], "agent.radius": [15.0], "agent.position": [50.0, 50.0], "agent.max_energy": 100,

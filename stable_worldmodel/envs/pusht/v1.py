@@ -11,7 +11,9 @@ subclasses change only what upstream does differently:
 - **Reward**: ``-||goal_state - state||`` over the 7 numbers.
 - **Success** (``terminated``): ``||state[:4] - goal[:4]|| < 20`` and block angle within pi/9;
   ``eval_state`` returns ``(success, ||goal - state||)`` over the 7 numbers.
-- **Reset**: factors ``agent.start_position``, ``block.start_position`` and ``block.angle`` are
+- **Reset**: the variation space is seeded with the reset seed (as upstream, so a seed draws
+  upstream's start, goal and factors; without a seed, from the env's generator), reset to its
+  defaults, and ``agent.start_position``, ``block.start_position`` and ``block.angle`` are
   resampled unless ``options["variation"]`` names others; with no ``goal_state`` option the goal
   is a second draw of those three factors (agent velocity: the ``agent.velocity`` factor). The
   env puts the bodies at the goal, takes one physics step (10 ms), renders the goal image,
@@ -37,7 +39,7 @@ import numpy as np
 
 from ... import keys, spaces
 from ...errors import ConfigError
-from ..base import apply_variation_options
+from ..base import check_variation_option
 from .env import GOAL_POSE, PushT, _state_option
 from .physics import CONTROL_HZ, K_P, K_V, SIM_HZ, WINDOW, body_state, on_post_solve
 from .v1_render import draw_v1_scene
@@ -61,36 +63,39 @@ def build_v1_variation_space() -> spaces.Dict:
     def rgb(c):
         return spaces.RGBBox(init_value=np.asarray(c, np.uint8))
 
+    # Keys in alphabetical order at every level, as Gymnasium sorts upstream's plain dicts: the
+    # per-key seeds and the sampling order inside each group follow it, so a reset seed draws
+    # the factors upstream draws.
     return spaces.Dict(
         {
             "agent": spaces.Dict(
                 {
+                    "angle": box(-two_pi, two_pi, 0.0),
                     "color": rgb((65, 105, 225)),
                     "scale": box(20, 60, 40, dtype=np.float32),
                     "shape": spaces.Discrete(len(V1_SHAPES), start=0, init_value=0),
-                    "angle": box(-two_pi, two_pi, 0.0),
                     "start_position": box(50, 450, (256.0, 400.0), (2,)),
                     "velocity": box(0, WINDOW, (0.0, 0.0), (2,)),
                 }
             ),
+            "background": spaces.Dict({"color": rgb((255, 255, 255))}),
             "block": spaces.Dict(
                 {
+                    "angle": box(-two_pi, two_pi, 0.0),
                     "color": rgb((119, 136, 153)),
                     "scale": box(20, 60, 40, dtype=np.float32),
                     "shape": spaces.Discrete(len(V1_SHAPES) - 1, start=1, init_value=2),
-                    "angle": box(-two_pi, two_pi, 0.0),
                     "start_position": box(100, 400, (400.0, 100.0), (2,)),
                 }
             ),
             "goal": spaces.Dict(
                 {
-                    "color": rgb((144, 238, 144)),
-                    "scale": box(20, 60, 40, dtype=np.float32),
                     "angle": box(-two_pi, two_pi, np.pi / 4),
+                    "color": rgb((144, 238, 144)),
                     "position": box(50, 450, (256.0, 256.0), (2,)),
+                    "scale": box(20, 60, 40, dtype=np.float32),
                 }
             ),
-            "background": spaces.Dict({"color": rgb((255, 255, 255))}),
             "rendering": spaces.Dict({"render_goal": spaces.Discrete(2, init_value=1)}),
         },
         sampling_order=["background", "goal", "block", "agent", "rendering"],
@@ -158,9 +163,10 @@ class PushTV1(PushT):
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         gym.Env.reset(self, seed=seed)
         options = dict(options or {})
-        factor_options = dict(options)
-        factor_options.setdefault(keys.VARIATION, DEFAULT_VARIATIONS)
-        apply_variation_options(self.variation_space, factor_options, self.np_random)
+        if seed is None:  # upstream reseeds from fresh entropy here: draw from the env's generator instead
+            seed = int(self.np_random.integers(0, 2**31 - 1))
+        check_variation_option(options, self.variation_space.names())
+        spaces.reset_variation_space(self.variation_space, seed, options, DEFAULT_VARIATIONS)
         vs = self.variation_space
         v = self._values = vs.value
 
