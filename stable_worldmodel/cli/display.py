@@ -76,6 +76,12 @@ def names_tree(title: str, names: Sequence[str], describe: Mapping[str, str] | N
     return tree
 
 
+def _uniform(values: Any) -> Any:
+    """One number for an array whose entries are all equal (``[[7.0]]`` -> ``7.0``), else the array."""
+    arr = np.asarray(values)
+    return arr.reshape(-1)[0] if arr.size and np.all(arr == arr.reshape(-1)[0]) else values
+
+
 def describe_factor(space: Any) -> str:
     """``"RGBBox [0, 255] (3,) = [220, 40, 40]"``: type, range or size, shape and current default."""
     kind = type(space).__name__
@@ -83,7 +89,10 @@ def describe_factor(space: Any) -> str:
     if hasattr(space, "n"):
         parts.append(f"n={short(space.n)}")
     elif hasattr(space, "low") and hasattr(space, "high"):
-        parts.append(f"[{short(space.low)}, {short(space.high)}]")
+        parts.append(f"[{short(_uniform(space.low))}, {short(_uniform(space.high))}]")
+    elif hasattr(space, "nvec"):
+        start = np.asarray(getattr(space, "start", 0))
+        parts.append(f"[{short(_uniform(start))}, {short(_uniform(start + np.asarray(space.nvec) - 1))}]")
     shape = getattr(space, "shape", None)
     if shape:
         parts.append(short(tuple(shape)))

@@ -196,6 +196,12 @@ def test_fovs_tree(swm):
     assert re.search(r"color\s+RGBBox \[0, 255\] \(3,\)", out)
 
 
+def test_fovs_shows_one_range_for_uniform_bounds(swm):
+    out = swm("fovs", "swm/TwoRoom-v1").stdout
+    assert re.search(r"radius\s+Box \[7, 14\] \(1,\)", out)  # not [[7], [14]]
+    assert re.search(r"size\s+MultiDiscrete \[1, 21\] \(3,\)", out)  # start .. start + nvec - 1
+
+
 def test_fovs_unknown_env(swm, error_line):
     result = swm("fovs", "swm/Tooy-v0")
     assert result.exit_code == 1
