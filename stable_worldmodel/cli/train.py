@@ -60,4 +60,6 @@ def train_cmd(
     )
     prefix = get_config_class(model).eval_prefix
     how = "plan with" if prefix == "wm" else "act with"
+    if result.features is not None:
+        out.print(f"Frozen encoder: {result.features.describe()}", soft_wrap=True)
     out.print(f"Checkpoint: {result.folder} ({how}: swm eval ENV --policy {prefix}:{result.run}); loss curve: {result.folder / 'loss.png'}", soft_wrap=True)

@@ -9,6 +9,7 @@ Importing this package is cheap; torch is imported when :func:`train` runs.
 
 from __future__ import annotations
 
+import logging
 import math
 from typing import TYPE_CHECKING, Any
 
@@ -18,6 +19,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from .trainer import TrainResult
 
 __all__ = ["train"]
+
+logger = logging.getLogger(__name__)
 
 
 def _positive(name: str, value: Any) -> int | None:
@@ -47,6 +50,7 @@ def train(
     val_every: int | None = None,
     ckpt_every: int | None = None,
     progress: bool = True,
+    feature_cache: bool = True,
     **overrides: Any,
 ) -> TrainResult:
     """Train world model ``model`` (a name of ``stable_worldmodel.wm.list_models()``) on dataset ``dataset``.
@@ -57,7 +61,9 @@ def train(
     ``protocol.json`` go to ``<cache>/checkpoints/<name>/`` (default name ``<dataset>-<model>``),
     with metrics (``metrics.jsonl``, ``metrics.csv``, TensorBoard when installed) and ``loss.png``.
     ``resume=True`` continues the run of that name from its last checkpoint (same result as
-    an uninterrupted run); otherwise an existing run folder is an error.
+    an uninterrupted run); otherwise an existing run folder is an error. A model with a frozen
+    encoder (PreJEPA) trains on its features, computed once per dataset and encoder and kept on
+    disk (:mod:`stable_worldmodel.train.features`; ``feature_cache=False`` encodes every batch).
     """
     import shutil
 
@@ -101,6 +107,14 @@ def train(
     tree = cfg.target_tree(data.action_dim)
     torch.manual_seed(seed)
     net = wmu.instantiate(tree)
+    features = None
+    frozen = getattr(net, "frozen_encoder", None)
+    if feature_cache and callable(frozen) and not data.goals:
+        from .features import load_or_compute_features
+
+        features = load_or_compute_features(data.dataset, net.to(dev).encode_pixels, frozen(), cfg, dev)
+        data.use_features(features.features)
+        logger.info("%s", features.describe())
     protocol = {
         "model": model,
         "preset": preset,
@@ -116,6 +130,8 @@ def train(
         "precision": precision,
         **data.protocol(),
     }
+    if features is not None:
+        protocol["feature_cache"] = {"file": str(features.path), "computed": features.computed, "seconds": round(features.seconds, 3)}
     val_every = val_every if val_every is not None else max(log_every, steps // 10)
     ckpt_every = ckpt_every if ckpt_every is not None else max(1, steps // 4)
     trainer = Trainer(
@@ -130,7 +146,9 @@ def train(
         trainer.load_state_dict(state)
     try:
         log = MetricsLog(folder, resume_step=trainer.step if resume else None)
-        return trainer.fit(log)
+        result = trainer.fit(log)
+        result.features = features
+        return result
     except BaseException:
         if not resume and trainer.step == 0 and not any(folder.glob("*.pt")):
             shutil.rmtree(folder, ignore_errors=True)  # nothing worth keeping

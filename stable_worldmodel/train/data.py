@@ -45,7 +45,8 @@ def split_episodes(num_episodes: int, val_fraction: float, seed: int) -> tuple[n
 
 class TrainData:
     """Batches of ``pixels (B, T, C, S, S)`` (preprocessed floats) and normalized
-    ``action (B, T, frameskip * A)`` on ``device``, from dataset ``name``.
+    ``action (B, T, frameskip * A)`` on ``device``, from dataset ``name``; plus normalized
+    ``proprio (B, T, P)`` when the config asks for it (``cfg.proprio_dim > 0``, PreJEPA).
 
     Raises :class:`~stable_worldmodel.errors.DatasetFormatError` when a column is missing
     or no episode is long enough for one window.
@@ -64,13 +65,15 @@ class TrainData:
                 f"Datasets in {path.parent}: {', '.join(names) or '(none)'}"
             )
         self.dataset = HDF5Dataset(name, frameskip=cfg.frameskip, num_steps=cfg.num_steps, cache_dir=cache_dir)
-        missing = [k for k in (keys.PIXELS, keys.ACTION) if k not in self.dataset.column_names]
+        self.extra_keys = [keys.PROPRIO] if getattr(cfg, "proprio_dim", 0) else []
+        missing = [k for k in (keys.PIXELS, keys.ACTION, *self.extra_keys) if k not in self.dataset.column_names]
         if missing:
             raise DatasetFormatError(
                 f"Training requires dataset columns {missing} in {self.dataset.path}, got {sorted(self.dataset.column_names)}"
             )
         self.dataset = HDF5Dataset(
-            name, frameskip=cfg.frameskip, num_steps=cfg.num_steps, keys_to_load=[keys.PIXELS, keys.ACTION], cache_dir=cache_dir
+            name, frameskip=cfg.frameskip, num_steps=cfg.num_steps, keys_to_load=[keys.PIXELS, keys.ACTION, *self.extra_keys],
+            cache_dir=cache_dir,
         )
         shape, _ = self.dataset.column_shape(keys.PIXELS)
         if len(shape) != 3 or shape[-1] not in (1, 3):
@@ -79,6 +82,13 @@ class TrainData:
             raise ConfigError(f"Training requires {len(cfg.image_mean)}-channel images, got {shape[-1]} channels in {self.dataset.path}")
         self.image_shape = tuple(int(v) for v in shape)
         self.action_dim = int(np.prod(self.dataset.column_shape(keys.ACTION)[0]))
+        for key in self.extra_keys:
+            width = int(np.prod(self.dataset.column_shape(key)[0]))
+            if width != cfg.proprio_dim:
+                raise ConfigError(
+                    f"Training requires proprio_dim equal to the width of column {key!r}, "
+                    f"got proprio_dim={cfg.proprio_dim} and {width} in {self.dataset.path}"
+                )
         self.train_episodes, self.val_episodes = split_episodes(self.dataset.num_episodes, cfg.val_fraction, seed)
         eps, _ = self.dataset._locate_many(np.arange(len(self.dataset), dtype=np.int64))
         in_val = np.isin(eps, self.val_episodes)
@@ -91,6 +101,8 @@ class TrainData:
                 "lower --frameskip / history or record longer episodes"
             )
         self.normalizer = self._fit_normalizer()
+        self.extra_normalizers = {key: self._fit_normalizer(key) for key in self.extra_keys}
+        self.features: np.ndarray | None = None  # frozen-encoder features per dataset row (use_features)
         self.goals = self._goal_samplers(cfg) if isinstance(cfg, GoalConditioned) else {}
 
     def _goal_samplers(self, cfg: Any) -> dict[str, GoalSampler]:
@@ -104,8 +116,8 @@ class TrainData:
             samplers[f"actor_{goal_key}"] = GoalSampler(lengths, offsets, groups, cfg.actor_goal_probabilities, **common)
         return samplers
 
-    def _fit_normalizer(self) -> Normalizer:
-        actions = self.dataset.get_col_data(keys.ACTION).reshape(self.dataset.num_rows, -1)
+    def _fit_normalizer(self, key: str = keys.ACTION) -> Normalizer:
+        actions = self.dataset.get_col_data(key).reshape(self.dataset.num_rows, -1)
         rows = np.concatenate(
             [np.arange(o, o + n) for o, n in zip(self.dataset.offsets[self.train_episodes], self.dataset.lengths[self.train_episodes])]
         )
@@ -124,6 +136,8 @@ class TrainData:
         configs) are drawn by ``generator``; without one, by a generator seeded from the run's
         seed and ``index[0]`` (validation batches get the same goals every time)."""
         index = np.asarray(index, dtype=np.int64)
+        if self.features is not None:
+            return self._feature_batch(index)
         raw = self.dataset._batch(index)
         frames = raw[keys.PIXELS]
         t = frames.shape[1]
@@ -136,8 +150,36 @@ class TrainData:
         cfg = self.cfg
         pixels = preprocess_images(frames.to(self.device, non_blocking=True), cfg.image_mean, cfg.image_std, cfg.image_size)
         out = {keys.PIXELS: pixels[:, :t], keys.ACTION: self.normalizer.torch(action, repeat=cfg.frameskip)}
+        for key, norm in self.extra_normalizers.items():
+            values = raw[key].to(self.device, dtype=torch.float32)
+            out[key] = norm.torch(torch.nan_to_num(values.reshape(*values.shape[:2], -1), 0.0))
         for i, key in enumerate(goal_keys):
             out[key] = pixels[:, t + i : t + i + 1]
+        return out
+
+    def use_features(self, features: np.ndarray) -> None:
+        """Serve ``pixels_emb (B, T, ...)`` gathered from ``features`` (one row per dataset row,
+        see :mod:`.features`) instead of ``pixels``: the frames are then never decoded."""
+        if self.goals:
+            raise ConfigError("Training from cached features requires a config without hindsight goals")
+        if len(features) != self.dataset.num_rows:
+            raise ConfigError(f"Training requires one feature row per dataset row, got {len(features)} for {self.dataset.num_rows}")
+        self.features = features
+
+    def _feature_batch(self, index: np.ndarray) -> dict[str, torch.Tensor]:
+        ds = self.dataset
+        eps, steps = ds._locate_many(index)
+        starts = ds._sample_index()[1][eps] + steps
+        rows = starts[:, None] + ds._row_offsets(keys.PIXELS)[None, :]  # (B, T) dataset rows of the frames
+        unique, where = np.unique(rows, return_inverse=True)  # one sorted read of the memory map
+        feats = torch.from_numpy(np.asarray(self.features[unique]))
+        out = {"pixels_emb": feats[torch.from_numpy(where.reshape(rows.shape))].to(self.device)}
+        action = ds._read_windows(keys.ACTION, starts).reshape(len(starts), ds.num_steps, -1)
+        action = torch.nan_to_num(torch.from_numpy(np.ascontiguousarray(action)).to(self.device, dtype=torch.float32), 0.0)
+        out[keys.ACTION] = self.normalizer.torch(action, repeat=self.cfg.frameskip)
+        for key, norm in self.extra_normalizers.items():
+            values = torch.from_numpy(np.ascontiguousarray(ds._read_windows(key, starts))).to(self.device, dtype=torch.float32)
+            out[key] = norm.torch(torch.nan_to_num(values.reshape(*values.shape[:2], -1), 0.0))
         return out
 
     def _goal_frames(self, rows: np.ndarray) -> torch.Tensor:
@@ -171,5 +213,8 @@ class TrainData:
             "val_samples": self.num_val,
             "dataset_image_shape": list(self.image_shape),
             "action_dim": self.action_dim,
-            "normalizers": {keys.ACTION: self.normalizer.to_dict()},
+            "normalizers": {
+                keys.ACTION: self.normalizer.to_dict(),
+                **{k: n.to_dict() for k, n in self.extra_normalizers.items()},
+            },
         }

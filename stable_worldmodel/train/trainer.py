@@ -90,6 +90,8 @@ class TrainResult:
     seconds: float
     samples_per_second: float
     history: list[dict[str, Any]] = field(default_factory=list)
+    #: the frozen-encoder feature cache this run used (:class:`~stable_worldmodel.train.features.FeatureCache`), if any
+    features: Any = None
 
 
 class Trainer:

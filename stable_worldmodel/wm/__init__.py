@@ -5,7 +5,7 @@ Importing this package is cheap; torch is imported when a model class is first u
 
     >>> import stable_worldmodel as swm
     >>> swm.wm.list_models()
-    ['dummy', 'gcbc', 'gciql', 'gcivl', 'lewm', 'pldm']
+    ['dinowm', 'dummy', 'gcbc', 'gciql', 'gcivl', 'lewm', 'pldm', 'prejepa']
     >>> model = swm.wm.make("lewm", preset="tiny", action_dim=2)      # doctest: +SKIP
 
 The contract every model follows (shapes: ``B`` envs, ``S`` candidates, ``T`` history,
@@ -15,6 +15,9 @@ The contract every model follows (shapes: ``B`` envs, ``S`` candidates, ``T`` hi
 -> (B, S)`` and ``loss(batch) -> {"loss": ..., named terms}``. The goal-conditioned baselines
 (``gcbc``, ``gcivl``, ``gciql``: :class:`~stable_worldmodel.wm.gcrl.GCRL`) act instead of
 planning: ``get_action(info) -> (B, A)`` and ``loss(batch)`` (see :mod:`stable_worldmodel.wm.gcrl`).
+``prejepa`` (alias ``dinowm``: :class:`~stable_worldmodel.wm.prejepa.PreJEPA`, DINO-WM) plans on
+the patch tokens of a frozen encoder (:func:`~stable_worldmodel.wm.backbones.create_backbone`),
+whose features the trainer caches on disk (:mod:`stable_worldmodel.train.features`).
 """
 
 from __future__ import annotations
@@ -27,6 +30,9 @@ from ._registry import get_config, get_config_class, list_models, make, register
 _ATTRS = {
     "LeWM": ".lewm",
     "PLDM": ".pldm",
+    "PreJEPA": ".prejepa",
+    "DINOWM": ".dinowm",
+    "create_backbone": ".backbones",
     "DummyWorldModel": ".dummy",
     "GCRL": ".gcrl",
     "GCBC": ".gcbc",
@@ -42,6 +48,7 @@ _ATTRS = {
     "vit_hf": ".encoders",
     "LeWMConfig": ".lewm.config",
     "PLDMConfig": ".pldm.config",
+    "PreJEPAConfig": ".prejepa.config",
     "DummyConfig": ".dummy_config",
     "GCBCConfig": ".gcrl.config",
     "GCIVLConfig": ".gcrl.config",

@@ -18,6 +18,8 @@ _ENTRIES: dict[str, Any] = {
     "gcbc": f"{_P}.gcrl.config:GCBCConfig",
     "gcivl": f"{_P}.gcrl.config:GCIVLConfig",
     "gciql": f"{_P}.gcrl.config:GCIQLConfig",
+    "prejepa": f"{_P}.prejepa.config:PreJEPAConfig",
+    "dinowm": f"{_P}.prejepa.config:PreJEPAConfig",
 }
 
 

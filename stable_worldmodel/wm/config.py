@@ -144,6 +144,11 @@ class JEPAConfig:
             return int(self.vit_overrides.get("hidden_size", VIT_SIZES[self.vit_size]["hidden_size"]))
         return self.embed_dim
 
+    def transformer_sizes(self) -> dict[str, Any]:
+        """The predictor transformer's size arguments (``depth``, ``heads``, ``mlp_dim``, ``dim_head``, dropouts)."""
+        return {"depth": self.depth, "heads": self.heads, "mlp_dim": self.mlp_dim, "dim_head": self.dim_head,
+                "dropout": self.dropout, "emb_dropout": 0.0}
+
     def _mlp(self, d_in: int, d_out: int, hidden: int, batchnorm: bool = True) -> dict[str, Any]:
         tree = {"_target_": f"{_P}.lewm.module.MLP", "input_dim": d_in, "output_dim": d_out, "hidden_dim": hidden}
         if batchnorm:
@@ -162,12 +167,7 @@ class JEPAConfig:
                 "input_dim": d,
                 "hidden_dim": d,
                 "output_dim": d,
-                "depth": self.depth,
-                "heads": self.heads,
-                "mlp_dim": self.mlp_dim,
-                "dim_head": self.dim_head,
-                "dropout": self.dropout,
-                "emb_dropout": 0.0,
+                **self.transformer_sizes(),
             },
             "action_encoder": {"_target_": f"{_P}.lewm.module.Embedder", "input_dim": self.frameskip * int(action_dim), "emb_dim": d},
         }

@@ -1,0 +1,145 @@
+"""PreJEPA's (DINO-WM's) light config and presets (no torch import)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+from ...errors import ConfigError
+from ..backbones import BACKBONES, backbone_spec
+from ..config import IMAGENET_MEAN, IMAGENET_STD, JEPAConfig
+
+__all__ = ["PreJEPAConfig"]
+
+_P = "stable_worldmodel.wm"
+_EMBEDDER = f"{_P}.prejepa.module.Embedder"
+
+
+@dataclass
+class PreJEPAConfig(JEPAConfig):
+    """:class:`~stable_worldmodel.wm.config.JEPAConfig` for DINO-WM.
+
+    Encoder (frozen): ``backbone`` (a name of :func:`~stable_worldmodel.wm.backbones.list_backbones`),
+    ``pretrained`` (load its weights from ``backbone_path`` or ``$STABLEWM_HOME/backbones/``;
+    never downloaded), ``backbone_overrides`` (transformers config fields of a randomly
+    initialised backbone). With ``backbone="cnn"``: ``embed_dim`` is the token width,
+    ``cnn_width`` the first conv's channels and ``cnn_grid`` the side of the patch grid.
+    Extra inputs: ``action_emb_dim`` (width of the action embedding), ``proprio_dim``
+    (numbers of the dataset's ``proprio`` column; 0: pixels only) and ``proprio_emb_dim``.
+    Predictor: ``depth``, ``heads``, ``dim_head``, ``mlp_dim``, ``dropout`` over
+    ``history_size`` frames. The inherited ``encoder``, ``vit_size``, ``vit_overrides``,
+    ``patch_size`` and ``projector_hidden`` are not used.
+
+    Presets: ``tiny`` (64x64, a frozen random patch CNN with 16 tokens of 32 features, a
+    2-layer predictor: a CPU trains it in minutes), ``small`` (pretrained DINOv2 ViT-S/14 at
+    112x112, 64 patches, a 4-layer predictor: one GPU) and ``paper`` (upstream's DINO-WM
+    recipe: pretrained DINOv2 ViT-S/14 at 224x224, 256 patches, predictor depth 6 with 16
+    heads of 64 and MLP 2048, action and proprio embeddings of 10, frameskip 5, history 3).
+    """
+
+    model_name: ClassVar[str] = "prejepa"
+    target: ClassVar[str] = f"{_P}.prejepa.PreJEPA"
+    presets: ClassVar[dict[str, dict[str, Any]]] = {
+        "tiny": {
+            "backbone": "cnn", "pretrained": False, "image_size": 64, "embed_dim": 32, "cnn_width": 16, "cnn_grid": 4,
+            "depth": 2, "heads": 4, "dim_head": 16, "mlp_dim": 128, "batch_size": 32, "lr": 1e-3, "warmup_steps": 50,
+            "steps": 1000,
+        },
+        "small": {
+            "backbone": "dinov2_small", "pretrained": True, "image_size": 112, "depth": 4, "heads": 8, "dim_head": 32,
+            "mlp_dim": 1024, "image_mean": IMAGENET_MEAN, "image_std": IMAGENET_STD, "batch_size": 64, "lr": 5e-4,
+            "steps": 20000,
+        },
+        "paper": {
+            "backbone": "dinov2_small", "pretrained": True, "image_size": 224, "depth": 6, "heads": 16, "dim_head": 64,
+            "mlp_dim": 2048, "dropout": 0.1, "image_mean": IMAGENET_MEAN, "image_std": IMAGENET_STD, "batch_size": 32,
+            "lr": 5e-4, "warmup_steps": 1000, "steps": 100000,
+        },
+    }
+
+    backbone: str = "cnn"
+    backbone_path: str | None = None
+    pretrained: bool = False
+    backbone_overrides: dict[str, Any] = field(default_factory=dict)
+    cnn_grid: int = 4
+    action_emb_dim: int = 10
+    proprio_dim: int = 0
+    proprio_emb_dim: int = 10
+    interpolate_pos_encoding: bool = True
+    history_size: int = 3
+    projector_hidden: int = 0
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        name = type(self).__name__
+        backbone_spec(self.backbone)  # an unknown name gets the "did you mean" error
+        for key in ("cnn_grid", "action_emb_dim", "proprio_emb_dim"):
+            value = getattr(self, key)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ConfigError(f"{name} requires {key} to be a positive int, got {value!r}")
+        if isinstance(self.proprio_dim, bool) or not isinstance(self.proprio_dim, int) or self.proprio_dim < 0:
+            raise ConfigError(f"{name} requires proprio_dim to be an int >= 0 (0: no proprio input), got {self.proprio_dim!r}")
+        if not isinstance(self.pretrained, bool):
+            raise ConfigError(f"{name} requires pretrained to be a bool, got {self.pretrained!r}")
+        if self.backbone == "cnn" and self.pretrained:
+            raise ConfigError(f"{name} requires pretrained=False with backbone 'cnn' (it has no pretrained weights), got True")
+        if self.backbone != "cnn" and self.image_size < self.backbone_patch:
+            raise ConfigError(f"{name} requires image_size >= the backbone's patch size {self.backbone_patch}, got {self.image_size}")
+
+    # -- sizes --------------------------------------------------------------------------------
+    @property
+    def backbone_patch(self) -> int:
+        return int(self.backbone_overrides.get("patch_size", BACKBONES[self.backbone].patch_size))
+
+    @property
+    def encoder_dim(self) -> int:
+        """Width ``Dv`` of the backbone's tokens."""
+        spec = backbone_spec(self.backbone)
+        if spec.family == "cnn":
+            return self.embed_dim
+        if spec.family == "resnet" and "hidden_sizes" in self.backbone_overrides:
+            return int(self.backbone_overrides["hidden_sizes"][-1])
+        return int(self.backbone_overrides.get("hidden_size", spec.width))
+
+    @property
+    def num_patches(self) -> int:
+        """Tokens per frame ``P``: the CNN's grid, one for a ResNet, (image_size // patch)**2 for a ViT."""
+        spec = backbone_spec(self.backbone)
+        if spec.family == "cnn":
+            return self.cnn_grid**2
+        if spec.family == "resnet":
+            return 1
+        return (self.image_size // self.backbone_patch) ** 2
+
+    # -- the model as a _target_ tree -----------------------------------------------------------
+    def encoder_tree(self) -> dict[str, Any]:
+        if self.backbone == "cnn":
+            backbone = {"name": "cnn", "image_size": self.image_size, "width": self.cnn_width, "hidden_size": self.embed_dim,
+                        "grid": self.cnn_grid}
+        else:
+            backbone = {"name": self.backbone, "path": self.backbone_path, "pretrained": self.pretrained, **self.backbone_overrides}
+        frozen = {"_target_": f"{_P}.backbones.create_backbone", **backbone}
+        return {"_target_": f"{_P}.gcrl.module.EvalOnly", "backbone": frozen}
+
+    def target_tree(self, action_dim: int) -> dict[str, Any]:
+        """The ``_target_`` tree of the model for env actions of ``action_dim`` numbers."""
+        extras: dict[str, Any] = {}
+        if self.proprio_dim:
+            extras["proprio"] = {"_target_": _EMBEDDER, "in_chans": self.proprio_dim, "emb_dim": self.proprio_emb_dim}
+        extras["action"] = {"_target_": _EMBEDDER, "in_chans": self.frameskip * int(action_dim), "emb_dim": self.action_emb_dim}
+        dim = self.encoder_dim + sum(e["emb_dim"] for e in extras.values())
+        return {
+            "_target_": self.target,
+            "encoder": self.encoder_tree(),
+            "predictor": {
+                "_target_": f"{_P}.prejepa.module.CausalPredictor",
+                "num_patches": self.num_patches,
+                "num_frames": self.history_size,
+                "dim": dim,
+                **self.transformer_sizes(),
+            },
+            "extra_encoders": extras,
+            "history_size": self.history_size,
+            "num_pred": self.num_preds,
+            "interpolate_pos_encoding": self.interpolate_pos_encoding and backbone_spec(self.backbone).family != "resnet",
+        }

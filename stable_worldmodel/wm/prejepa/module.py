@@ -1,0 +1,176 @@
+"""Building blocks of PreJEPA (DINO-WM), with upstream 0.1.1's constructor arguments and
+``state_dict`` names, so its checkpoints load here.
+
+- :class:`CausalPredictor`: a ViT over the ``T * P`` patch tokens of ``T`` frames whose
+  attention is causal across frames (a token sees every patch of its own and earlier frames).
+- :class:`Embedder`: a per-frame linear map (a 1-D conv) of actions or proprioception,
+  ``(B, T, in_chans) -> (B, T, emb_dim)``.
+- :class:`PatchConvEncoder`: the small CNN of the CPU presets (``create_backbone("cnn")``),
+  returning a ViT-like ``last_hidden_state (N, 1 + P, D)``.
+
+Shapes: ``B`` batch, ``T`` frames, ``P`` patches per frame, ``D`` token width.
+"""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+from typing import Any
+
+import torch
+import torch.nn.functional as F
+from torch import nn
+
+from ...errors import ConfigError, SpaceError
+from ..backbones import create_backbone  # noqa: F401  (upstream's configs name it here)
+from ..encoders import EncoderOutput
+from ..lewm.module import FeedForward
+
+__all__ = ["Attention", "CausalPredictor", "Embedder", "create_backbone", "FeedForward", "PatchConvEncoder", "Transformer", "frame_causal_mask"]
+
+
+def frame_causal_mask(num_patches: int, num_frames: int) -> torch.Tensor:
+    """``(1, 1, T * P, T * P)`` of ones where a token of frame ``i`` may attend to a token of
+    frame ``j <= i``, zeros elsewhere."""
+    frame = torch.arange(num_frames).repeat_interleave(num_patches)
+    return (frame[None, :] <= frame[:, None]).float()[None, None]
+
+
+class Embedder(nn.Module):
+    """``(B, T, in_chans) -> (B, T, emb_dim)``: a Conv1d over time with kernel and stride
+    ``tubelet_size`` (1: each frame mapped on its own), run in float32 outside autocast."""
+
+    def __init__(self, num_frames: int = 1, tubelet_size: int = 1, in_chans: int = 8, emb_dim: int = 10):
+        super().__init__()
+        for key, value in (("num_frames", num_frames), ("tubelet_size", tubelet_size), ("in_chans", in_chans), ("emb_dim", emb_dim)):
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ConfigError(f"Embedder requires {key} to be a positive int, got {value!r}")
+        self.num_frames, self.tubelet_size, self.in_chans, self.emb_dim = num_frames, tubelet_size, in_chans, emb_dim
+        self.patch_embed = nn.Conv1d(in_chans, emb_dim, kernel_size=tubelet_size, stride=tubelet_size)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        if x.shape[-1] != self.in_chans:
+            raise SpaceError(f"Embedder requires inputs (B, T, {self.in_chans}), got {tuple(x.shape)}")
+        with torch.autocast(device_type=x.device.type, enabled=False):
+            x = x.to(self.patch_embed.weight.dtype)
+            if self.tubelet_size == 1:  # a kernel-1 conv is a linear map of the last dim
+                return F.linear(x, self.patch_embed.weight.squeeze(-1), self.patch_embed.bias)
+            return self.patch_embed(x.transpose(1, 2)).transpose(1, 2)
+
+
+class Attention(nn.Module):
+    """Pre-norm multi-head self-attention under the frame-causal mask (buffer ``bias``,
+    upstream's name; it is part of the state dict)."""
+
+    def __init__(self, dim: int, heads: int = 8, dim_head: int = 64, dropout: float = 0.0, num_patches: int = 1, num_frames: int = 1):
+        super().__init__()
+        inner = heads * dim_head
+        self.heads, self.dim_head = heads, dim_head
+        self.scale = dim_head**-0.5
+        self.norm = nn.LayerNorm(dim)
+        self.dropout = nn.Dropout(dropout)
+        self.to_qkv = nn.Linear(dim, 3 * inner, bias=False)
+        if heads == 1 and dim_head == dim:
+            self.to_out: nn.Module = nn.Identity()
+        else:
+            self.to_out = nn.Sequential(nn.Linear(inner, dim), nn.Dropout(dropout))
+        self.register_buffer("bias", frame_causal_mask(num_patches, num_frames))
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        b, n, _ = x.shape
+        q, k, v = (t.view(b, n, self.heads, self.dim_head).transpose(1, 2) for t in self.to_qkv(self.norm(x)).chunk(3, dim=-1))
+        mask = self.bias[:, :, :n, :n] > 0.5
+        p = self.dropout.p if self.training else 0.0
+        out = F.scaled_dot_product_attention(q, k, v, attn_mask=mask, dropout_p=p)
+        return self.to_out(out.transpose(1, 2).reshape(b, n, self.heads * self.dim_head))
+
+
+class Transformer(nn.Module):
+    """``depth`` residual (attention, MLP) pairs, then a LayerNorm. ``layers[i]`` is a
+    ``ModuleList([Attention, FeedForward])`` (upstream's state-dict layout)."""
+
+    def __init__(self, dim: int, depth: int, heads: int, dim_head: int, mlp_dim: int, dropout: float = 0.0,
+                 num_patches: int = 1, num_frames: int = 1):
+        super().__init__()
+        self.norm = nn.LayerNorm(dim)
+        self.layers = nn.ModuleList(
+            nn.ModuleList([Attention(dim, heads, dim_head, dropout, num_patches, num_frames), FeedForward(dim, mlp_dim, dropout)])
+            for _ in range(depth)
+        )
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        for attn, ff in self.layers:
+            x = x + attn(x)
+            x = x + ff(x)
+        return self.norm(x)
+
+
+class CausalPredictor(nn.Module):
+    """Next-frame predictor over patch tokens.
+
+    ``forward(x)``: ``x: (B, T * P, dim)``, the ``P`` tokens of each of ``T <= num_frames``
+    frames in time order -> ``(B, T * P, dim)``, where the tokens of output frame ``t``
+    predict frame ``t + 1`` from frames ``<= t``. Learned positions cover ``num_frames * num_patches`` tokens.
+    """
+
+    def __init__(self, *, num_patches: int, num_frames: int, dim: int, depth: int, heads: int, mlp_dim: int,
+                 pool: str = "cls", dim_head: int = 64, dropout: float = 0.0, emb_dropout: float = 0.0, **kwargs: Any):
+        super().__init__()
+        if pool not in ("cls", "mean"):
+            raise ConfigError(f"CausalPredictor requires pool 'cls' or 'mean', got {pool!r}")
+        for key, value in (("num_patches", num_patches), ("num_frames", num_frames), ("dim", dim), ("depth", depth),
+                           ("heads", heads), ("mlp_dim", mlp_dim), ("dim_head", dim_head)):
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ConfigError(f"CausalPredictor requires {key} to be a positive int, got {value!r}")
+        self.num_patches, self.num_frames, self.pool = num_patches, num_frames, pool
+        self.pos_embedding = nn.Parameter(torch.randn(1, num_frames * num_patches, dim))
+        self.dropout = nn.Dropout(emb_dropout)
+        self.transformer = Transformer(dim, depth, heads, dim_head, mlp_dim, dropout, num_patches, num_frames)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        n = x.shape[1]
+        if n > self.pos_embedding.shape[1] or n % self.num_patches:
+            raise SpaceError(
+                f"CausalPredictor requires T * {self.num_patches} tokens with T <= num_frames={self.num_frames}, got {n} tokens"
+            )
+        return self.transformer(self.dropout(x + self.pos_embedding[:, :n]))
+
+
+class PatchConvEncoder(nn.Module):
+    """Small strided CNN with patch tokens: ``(N, in_channels, image_size, image_size) ->
+    last_hidden_state (N, 1 + grid**2, hidden_size)``; token 0 is the mean of the patch tokens
+    (where a ViT has its CLS token), so a model that drops token 0 sees ``grid**2`` patches.
+
+    Each stage is a 4x4 stride-2 conv + GroupNorm + GELU (``width * 2**i`` channels, capped at
+    ``4 * width``) until the map is ``grid`` x ``grid``, then a 1x1 conv to ``hidden_size``.
+    """
+
+    def __init__(self, image_size: int = 64, in_channels: int = 3, width: int = 16, hidden_size: int = 32, grid: int = 4):
+        super().__init__()
+        for key, value in (("image_size", image_size), ("in_channels", in_channels), ("width", width),
+                           ("hidden_size", hidden_size), ("grid", grid)):
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ConfigError(f"PatchConvEncoder requires {key} to be a positive int, got {value!r}")
+        side, stages = image_size, 0
+        while side > grid and side % 2 == 0:
+            side, stages = side // 2, stages + 1
+        if side != grid:
+            raise ConfigError(f"PatchConvEncoder requires image_size = grid * 2**k, got image_size={image_size}, grid={grid}")
+        self.config = SimpleNamespace(image_size=image_size, num_channels=in_channels, hidden_size=hidden_size, grid=grid, width=width)
+        layers: list[nn.Module] = []
+        channels = in_channels
+        for i in range(stages):
+            out = width * min(2**i, 4)
+            layers += [nn.Conv2d(channels, out, 4, stride=2, padding=1), nn.GroupNorm(max(1, out // 8), out), nn.GELU()]
+            channels = out
+        self.convs = nn.Sequential(*layers)
+        self.head = nn.Conv2d(channels, hidden_size, 1)
+
+    def forward(self, pixels: torch.Tensor, interpolate_pos_encoding: bool = False, **kwargs: Any) -> EncoderOutput:
+        size, c = self.config.image_size, self.config.num_channels
+        if pixels.ndim != 4 or pixels.shape[1] != c or tuple(pixels.shape[-2:]) != (size, size):
+            raise SpaceError(
+                f"PatchConvEncoder requires images (N, {c}, {size}, {size}), got {tuple(pixels.shape)}; "
+                "resize them to the model's image_size"
+            )
+        tokens = self.head(self.convs(pixels.to(self.head.weight.dtype))).flatten(2).transpose(1, 2)  # (N, P, D)
+        return EncoderOutput(torch.cat([tokens.mean(1, keepdim=True), tokens], dim=1))
