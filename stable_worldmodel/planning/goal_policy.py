@@ -76,9 +76,8 @@ def load_run(run: str, method: str, expects: str, other_prefix: str, device: str
         )
     model = model.to(dev).eval()
     process = {}
-    norms = protocol.get("normalizers", {})
-    if keys.ACTION in norms:
-        process[keys.ACTION] = Normalizer.from_dict(norms[keys.ACTION])
+    for key, norm in protocol.get("normalizers", {}).items():  # action, and proprio for models trained on it
+        process[key] = Normalizer.from_dict(norm)
     size = int(protocol.get("image_size", 224))
     images = ImageTransform(protocol.get("image_mean", IMAGENET_MEAN), protocol.get("image_std", IMAGENET_STD), size)
     return model, protocol, dev, process, {keys.PIXELS: images, keys.GOAL: images}
