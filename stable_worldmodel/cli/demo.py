@@ -126,7 +126,7 @@ def demo(
 
         from .errors import check_choice
 
-        check_choice("world model", model, list_models())
+        check_choice("world model", model, [m for m in list_models() if m != "frame"])  # a frame decoder needs a source run
     out = output_dir(out, "swm demo --out")
     con = console()
     name = "demo-" + default_dataset_name(env, "expert")

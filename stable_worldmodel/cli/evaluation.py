@@ -57,7 +57,7 @@ def _from_dataset(world: Any, name: str, episodes: int, goal_offset: int, budget
 def evaluate_cli(
     env: str, policy: str, *, episodes: int, seed: int, variation: Sequence[str], num_envs: int, max_steps: int,
     image_size: int, plan: Any = None, device: str = "auto", from_dataset: str | None = None, goal_offset: int = 25,
-    budget: int = 50, video: Path | None = None,
+    budget: int = 50, video: Path | None = None, decoder: str | None = None,
 ) -> tuple[SuccessSummary, str, dict[str, Any]]:
     """Evaluate ``policy`` and return its summary, a table title and the JSON record."""
     start = time.perf_counter()
@@ -81,6 +81,13 @@ def evaluate_cli(
             title = f"{env}: seeds {seed}..{seed + episodes - 1}, at most {max_steps} steps"
             record.update(protocol="seeds", seeds=[seed, seed + episodes - 1], max_steps=max_steps, variation=list(variation))
         if video is not None:
+            run = checkpoint_run(policy)
+            if run is not None and policy.startswith("wm:"):
+                from ..planning.learned import attach_prediction_panel
+
+                used = attach_prediction_panel(world.policy, run, decoder, device=device)
+                if used is not None:
+                    record["decoder"] = used
             paths = world.record_video(video, max_steps=limit, seed=seed, options=reset_options(variation))
             record["videos"] = [str(p) for p in paths]
     summary = SuccessSummary.from_results(policy, results)

@@ -98,6 +98,7 @@ def eval_cmd(
     from_dataset: Annotated[str | None, typer.Option("--from-dataset", metavar="NAME", help="Start from held-out episodes of this dataset (upstream's protocol).", show_default=False)] = None,
     goal_offset: Annotated[int, typer.Option("--goal-offset", parser=int_in(1), metavar="G", help="With --from-dataset: the goal is the state G steps later.")] = 25,
     budget: Annotated[int, typer.Option("--budget", parser=int_in(1), metavar="N", help="With --from-dataset: steps allowed to reach the goal.")] = 50,
+    decoder: Annotated[str | None, typer.Option("--decoder", metavar="RUN", help="With --video and wm:RUN: the frame decoder that shows what the model predicts (default: RUN-frame when it exists).", show_default=False)] = None,
 ) -> None:
     """Evaluate a policy on ENV and print its success rate with a 95% confidence interval.
 
@@ -114,6 +115,8 @@ def eval_cmd(
         video = output_dir(video, "swm eval --video")
     if json_path is not None:
         json_path = output_file(json_path, "swm eval --json")
+    if decoder is not None and (video is None or not policy.startswith("wm:")):
+        raise typer.BadParameter("requires --video DIR and a wm:RUN policy (it decodes what the model predicts)", param_hint="--decoder")
     plan = None
     if policy.startswith("wm:"):
         from ..planning.learned import PlanSettings
@@ -124,7 +127,7 @@ def eval_cmd(
     summary, title, record = evaluate_cli(
         env, policy, episodes=episodes, seed=seed, variation=variation or [], num_envs=num_envs, max_steps=max_steps,
         image_size=image_size, plan=plan, device=device, from_dataset=from_dataset, goal_offset=goal_offset, budget=budget,
-        video=video,
+        video=video, decoder=decoder,
     )
     out.print(success_table(title, [summary]))
     if record.get("videos"):

@@ -21,8 +21,8 @@ def _float_pos(value: str) -> float:
 
 
 def train_cmd(
-    model: Annotated[str, typer.Argument(help="Model to train: lewm, pldm, dummy (world models) or gcbc, gcivl, gciql (goal-conditioned policies).", metavar="MODEL", show_default=False)],
-    dataset: Annotated[str, typer.Option("--dataset", "-d", metavar="NAME", help="Dataset in the cache (see `swm list dataset`).", show_default=False)],
+    model: Annotated[str, typer.Argument(help="Model to train: lewm, pldm, prejepa, dummy (world models), gcbc, gcivl, gciql (goal-conditioned policies) or frame (a decoder of another run's latents, with --from RUN).", metavar="MODEL", show_default=False)],
+    dataset: Annotated[str | None, typer.Option("--dataset", "-d", metavar="NAME", help="Dataset in the cache (see `swm list dataset`); a frame decoder defaults to its source run's.", show_default=False)] = None,
     preset: Annotated[str, typer.Option("--preset", metavar="PRESET", help="Sizes and recipe: tiny (CPU, minutes), small (GPU), paper (upstream's).")] = "tiny",
     steps: Annotated[int | None, typer.Option("--steps", parser=int_in(1), metavar="N", help="Optimizer steps (default: the preset's).", show_default=False)] = None,
     epochs: Annotated[float | None, typer.Option("--epochs", parser=_float_pos, metavar="E", help="Passes over the train samples (instead of --steps).", show_default=False)] = None,
@@ -34,11 +34,13 @@ def train_cmd(
     seed: SeedOpt = 0,
     resume: Annotated[bool, typer.Option("--resume", help="Continue the run RUN from its last checkpoint.")] = False,
     frameskip: Annotated[int | None, typer.Option("--frameskip", parser=int_in(1), metavar="K", help="Env steps per model step (the action block).", show_default=False)] = None,
+    source: Annotated[str | None, typer.Option("--from", metavar="RUN", help="frame only: the run whose latents the decoder learns to turn into frames (run name default: RUN-frame).", show_default=False)] = None,
 ) -> None:
     """Train MODEL on a recorded dataset; the checkpoint goes to $STABLEWM_HOME/checkpoints/RUN.
 
     Example: swm train lewm --dataset tworoom --preset tiny --name tr-lewm
-    (then: swm eval swm/TwoRoom-v2 --policy wm:tr-lewm; a gcbc / gcivl / gciql run: --policy gc:RUN)
+    (then: swm eval swm/TwoRoom-v2 --policy wm:tr-lewm; a gcbc / gcivl / gciql run: --policy gc:RUN;
+    swm train frame --from tr-lewm trains the decoder that swm eval --video shows the predictions with)
     """
     import sys
 
@@ -47,6 +49,10 @@ def train_cmd(
     from .display import console
 
     overrides = {"frameskip": frameskip} if frameskip is not None else {}
+    if source is not None:
+        overrides["source"] = source
+    if dataset is None and source is None:
+        raise typer.BadParameter("requires --dataset NAME (or --from RUN for a frame decoder)", param_hint="--dataset")
     out = console()
     result = train(
         model, dataset, preset, steps=steps, epochs=epochs, batch_size=batch_size, lr=lr, device=device,
@@ -54,7 +60,7 @@ def train_cmd(
     )
     val = f"{result.val_loss:.4f}" if result.val_loss is not None else "n/a"
     out.print(
-        f"Trained {model} ({preset}) on {dataset}: {result.steps} steps in {result.seconds:.0f} s "
+        f"Trained {model} ({preset}) on {dataset or 'the dataset of ' + str(source)}: {result.steps} steps in {result.seconds:.0f} s "
         f"({result.samples_per_second:.0f} samples/s), train loss {result.train_loss:.4f}, val loss {val}",
         soft_wrap=True,
     )

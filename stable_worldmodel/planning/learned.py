@@ -117,3 +117,28 @@ def world_model_policy(
     if dev.type == "cuda":
         torch.backends.cuda.matmul.allow_tf32 = True
     return policy, protocol
+
+
+def attach_prediction_panel(policy: Any, run: str, decoder: str | None = None, *, device: str = "auto",
+                            cache_dir: str | None = None) -> str | None:
+    """Make ``policy`` (a ``wm:run`` :class:`~stable_worldmodel.policy.WorldModelPolicy`) decode
+    what it predicts with frame decoder run ``decoder`` (default: ``<run>-frame`` when it
+    exists; ``swm train frame --from RUN`` makes it), so ``World.record_video`` shows it.
+    Returns the decoder run used, or None when there is none to use."""
+    from ..wm.frame import FrameModel, PredictionPanel
+    from ..wm.utils import checkpoint_root, load_checkpoint
+    from ..train.trainer import resolve_device
+
+    name = decoder or f"{run}-frame"
+    if decoder is None and not (checkpoint_root(cache_dir) / name).is_dir():
+        return None
+    frame, protocol = load_checkpoint(name, cache_dir)
+    if not isinstance(frame, FrameModel):
+        raise ConfigError(f"A prediction panel requires a frame decoder run (swm train frame --from {run}), got {type(frame).__name__} in {name!r}")
+    source = protocol.get("config", {}).get("source")
+    if source not in (None, run):
+        logger.warning("Frame decoder %r was trained on the latents of %r, not %r: its frames may not mean much", name, source, run)
+    frame = frame.to(resolve_device(device)).eval()
+    policy.prediction_panel = PredictionPanel(policy.solver.model, frame, protocol.get("image_mean", (0.5,) * 3),
+                                              protocol.get("image_std", (0.5,) * 3))
+    return name

@@ -76,6 +76,11 @@ class WorldModelPolicy(BasePolicy):
         self.process = process if process is not None else {}
         self.transform = transform if transform is not None else {}
         self.last_plan: dict | None = None
+        #: optional ``(info, executed action blocks (B, R, A)) -> (B, S, S, 3)`` uint8, called after
+        #: each plan (see :class:`stable_worldmodel.wm.frame.PredictionPanel`); its frames are
+        #: kept in ``predicted_frames`` and shown by ``World.record_video``
+        self.prediction_panel: Callable[[dict, torch.Tensor], np.ndarray] | None = None
+        self.predicted_frames: np.ndarray | None = None
         self._space: gym.Space | None = None  # the batched action space planned for
         self._single = False  # the env has no num_envs: actions are returned without the batch axis
         self.reset_plan()
@@ -95,6 +100,7 @@ class WorldModelPolicy(BasePolicy):
         self._queue: np.ndarray | None = None
         self._pos = 0
         self._next_init: torch.Tensor | None = None
+        self.predicted_frames = None
 
     def set_env(self, env: Any) -> None:
         """Attach the env and configure the solver for its batched action space.
@@ -171,3 +177,5 @@ class WorldModelPolicy(BasePolicy):
         self._queue = to_env_actions(plan[:, :rh], self.process, self._space, steps=True)
         self._pos = 0
         self.last_plan = result
+        if self.prediction_panel is not None:
+            self.predicted_frames = self.prediction_panel(info, plan[:, :rh])

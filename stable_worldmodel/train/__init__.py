@@ -33,7 +33,7 @@ def _positive(name: str, value: Any) -> int | None:
 
 def train(
     model: str,
-    dataset: str,
+    dataset: str | None,
     preset: str = "tiny",
     *,
     steps: int | None = None,
@@ -56,7 +56,8 @@ def train(
     """Train world model ``model`` (a name of ``stable_worldmodel.wm.list_models()``) on dataset ``dataset``.
 
     ``preset`` picks sizes and recipe (``tiny``, ``small``, ``paper``); ``overrides`` set any
-    config field (``frameskip=5``, ``embed_dim=32`` ...). ``steps`` or ``epochs`` (passes over
+    config field (``frameskip=5``, ``embed_dim=32`` ...; ``train("frame", None, source=RUN)``
+    trains a frame decoder on RUN's latents and dataset, as run ``RUN-frame``). ``steps`` or ``epochs`` (passes over
     the train samples) bound the run (default: the preset's steps). The model, its config and
     ``protocol.json`` go to ``<cache>/checkpoints/<name>/`` (default name ``<dataset>-<model>``),
     with metrics (``metrics.jsonl``, ``metrics.csv``, TensorBoard when installed) and ``loss.png``.
@@ -88,8 +89,12 @@ def train(
     if lr is not None:
         overrides["lr"] = lr
     cfg = get_config(model, preset, **overrides)
+    if dataset is None:  # a frame decoder trains on its source run's dataset
+        dataset = getattr(cfg, "source_dataset", None)
+        if not dataset:
+            raise ConfigError(f"train requires a dataset name for {model!r}, got None")
     dev = resolve_device(device)
-    run = name or f"{dataset}-{model}"
+    run = name or getattr(cfg, "default_run", None) or f"{dataset}-{model}"
     if not run or "/" in run or "\\" in run or run.startswith("."):
         raise ConfigError(f"train requires a plain run name (no path), got {run!r}")
     folder = wmu.checkpoint_root(cache_dir) / run
@@ -107,6 +112,8 @@ def train(
     tree = cfg.target_tree(data.action_dim)
     torch.manual_seed(seed)
     net = wmu.instantiate(tree)
+    if callable(getattr(cfg, "prepare_model", None)):  # e.g. the frame decoder loads its source run
+        cfg.prepare_model(net)
     features = None
     frozen = getattr(net, "frozen_encoder", None)
     if feature_cache and callable(frozen) and not data.goals:

@@ -5,7 +5,7 @@ Importing this package is cheap; torch is imported when a model class is first u
 
     >>> import stable_worldmodel as swm
     >>> swm.wm.list_models()
-    ['dinowm', 'dummy', 'gcbc', 'gciql', 'gcivl', 'lewm', 'pldm', 'prejepa']
+    ['dinowm', 'dummy', 'frame', 'gcbc', 'gciql', 'gcivl', 'lewm', 'pldm', 'prejepa']
     >>> model = swm.wm.make("lewm", preset="tiny", action_dim=2)      # doctest: +SKIP
 
 The contract every model follows (shapes: ``B`` envs, ``S`` candidates, ``T`` history,
@@ -17,7 +17,8 @@ The contract every model follows (shapes: ``B`` envs, ``S`` candidates, ``T`` hi
 planning: ``get_action(info) -> (B, A)`` and ``loss(batch)`` (see :mod:`stable_worldmodel.wm.gcrl`).
 ``prejepa`` (alias ``dinowm``: :class:`~stable_worldmodel.wm.prejepa.PreJEPA`, DINO-WM) plans on
 the patch tokens of a frozen encoder (:func:`~stable_worldmodel.wm.backbones.create_backbone`),
-whose features the trainer caches on disk (:mod:`stable_worldmodel.train.features`).
+whose features the trainer caches on disk (:mod:`stable_worldmodel.train.features`). ``frame``
+(:mod:`stable_worldmodel.wm.frame`) decodes another run's latents back into frames.
 """
 
 from __future__ import annotations

@@ -20,6 +20,7 @@ _ENTRIES: dict[str, Any] = {
     "gciql": f"{_P}.gcrl.config:GCIQLConfig",
     "prejepa": f"{_P}.prejepa.config:PreJEPAConfig",
     "dinowm": f"{_P}.prejepa.config:PreJEPAConfig",
+    "frame": f"{_P}.frame.config:FrameConfig",
 }
 
 

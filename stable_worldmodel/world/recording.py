@@ -243,10 +243,15 @@ def collect(
         world.verbose = verbose
 
 
-def _frame(infos: Mapping[str, Any], views: Sequence[str], env: int) -> np.ndarray:
+def _frame(infos: Mapping[str, Any], views: Sequence[str], env: int, predicted: np.ndarray | None = None) -> np.ndarray:
     from ..data.video import hstack_frames, vstack_frames
 
-    top = hstack_frames([np.asarray(infos[v])[env, -1] for v in views])
+    row = [np.asarray(infos[v])[env, -1] for v in views]
+    if predicted is not None:  # what the planning model expects to see, at the first view's size
+        from ..wrapper._image import resize
+
+        row.append(resize(np.ascontiguousarray(predicted[env]), row[0].shape[:2]))
+    top = hstack_frames(row)
     if keys.GOAL in infos and keys.GOAL not in views:
         return vstack_frames([top, np.asarray(infos[keys.GOAL])[env, -1]])
     return top
@@ -274,19 +279,30 @@ def record_video(
     """Roll out the policy and write ``<video_path>/env_<i>.mp4`` for every env.
 
     Each frame shows the ``viewname`` views side by side with the goal image below (when the
-    infos have one). Recording stops after ``max_steps`` steps or when any env ends.
-    Returns the written paths.
+    infos have one). A policy with a ``prediction_panel`` (a world model with a frame decoder)
+    adds, right of the views, the frame it predicted for the end of the action block it is
+    executing (black before its first plan). Recording stops after ``max_steps`` steps or when
+    any env ends. Returns the written paths.
     """
     from ..data.video import write_mp4
 
     world.reset(seed=seed, options=options)
     views = _check_views(world.infos, viewname)
     n = int(world.num_envs)
-    frames: list[list[np.ndarray]] = [[_frame(world.infos, views, i)] for i in range(n)]
+    policy = getattr(world, "policy", None)
+    blank = np.zeros_like(np.asarray(world.infos[views[0]])[:, -1]) if getattr(policy, "prediction_panel", None) else None
+
+    def predicted() -> np.ndarray | None:
+        if blank is None:
+            return None
+        frames = getattr(policy, "predicted_frames", None)
+        return blank if frames is None else frames
+
+    frames: list[list[np.ndarray]] = [[_frame(world.infos, views, i, predicted())] for i in range(n)]
     for _ in range(int(max_steps)):
         world.step()
         for i in range(n):
-            frames[i].append(_frame(world.infos, views, i))
+            frames[i].append(_frame(world.infos, views, i, predicted()))
         if np.any(np.asarray(world.terminateds) | np.asarray(world.truncateds)):
             break
     return [write_mp4(Path(video_path) / f"env_{i}.mp4", frames[i], fps=fps) for i in range(n)]

@@ -67,6 +67,8 @@ def test_projector_needed_when_encoder_width_differs():
 
 def test_presets_render_json_trees():
     for name in wm.list_models():
+        if name == "frame":  # its tree embeds a source run's: tests/train/test_frame_decoder.py
+            continue
         cls = wm.get_config_class(name)
         for preset in cls.presets:
             tree = wm.get_config(name, preset).target_tree(3)

@@ -1,0 +1,71 @@
+"""``wm.frame``: a decoder trained on the frozen latents of another run (``swm train frame --from
+RUN``), and ``swm eval --video`` showing what the planning model predicts beside the real frames."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+import torch
+
+from stable_worldmodel.errors import ConfigError
+from stable_worldmodel.wm.frame import FrameDecoder, FrameModel
+from stable_worldmodel.wm.utils import load_checkpoint
+
+pytestmark = pytest.mark.usefixtures("one_torch_thread")
+
+
+@pytest.mark.parametrize(("size", "width"), [(16, 8), (12, 4), (8, 8)])
+def test_decoder_shapes(size, width):
+    dec = FrameDecoder(embed_dim=8, image_size=size, channels=3, width=width)
+    assert dec(torch.randn(2, 5, 8)).shape == (2, 5, 3, size, size)
+
+
+def test_decoder_refuses_bad_sizes():
+    with pytest.raises(ConfigError, match="image_size to be a positive int, got 0"):
+        FrameDecoder(embed_dim=8, image_size=0)
+
+
+def test_trains_on_the_frozen_latents_of_its_source(fit, toy):
+    from stable_worldmodel.train import train
+
+    fit("lewm", "lw", steps=4)
+    source, _ = load_checkpoint("lw")
+    result = train("frame", None, steps=60, batch_size=8, device="cpu", seed=0, progress=False, source="lw", width=8,
+                   lr=3e-3, warmup_steps=0)
+    assert result.run == "lw-frame"
+    losses = [r["train/loss"] for r in result.history if "train/loss" in r]
+    assert np.mean(losses[-3:]) < 0.7 * np.mean(losses[:3])  # the decoder learns
+    frame, protocol = load_checkpoint("lw-frame")
+    assert isinstance(frame, FrameModel) and protocol["dataset"] == toy and protocol["config"]["source"] == "lw"
+    for name, value in source.state_dict().items():  # the source model was not trained
+        torch.testing.assert_close(frame.world_model.state_dict()[name], value)
+
+
+def test_needs_a_source_with_one_latent_per_frame(fit):
+    from stable_worldmodel.train import train
+
+    with pytest.raises(ConfigError, match="requires source"):
+        train("frame", "toy", steps=1, progress=False)
+    fit("prejepa", "pj", steps=1, image_size=16, embed_dim=8, cnn_width=8, cnn_grid=2, depth=1, heads=2, dim_head=4,
+        mlp_dim=16, history_size=2, frameskip=1, warmup_steps=0)
+    with pytest.raises(ConfigError, match="one latent vector per frame"):
+        train("frame", None, steps=1, device="cpu", progress=False, source="pj", width=4)
+
+
+def test_eval_video_shows_the_predicted_frames(swm, fit, tmp_path):
+    import av
+
+    fit("lewm", "lw", steps=2)
+    assert swm("train", "frame", "--from", "lw", "--steps", "2", "--device", "cpu").exit_code == 0
+    args = ["eval", "swm/Toy-v0", "--policy", "wm:lw", "-n", "1", "--samples", "4", "--iterations", "1", "--horizon", "2",
+            "--image-size", "16", "--max-steps", "4"]
+    plain = swm(*args, "--video", str(tmp_path / "plain"), "--json", str(tmp_path / "plain.json"), "--decoder", "lw-frame")
+    assert plain.exit_code == 0, plain.output
+    assert json.loads((tmp_path / "plain.json").read_text())["decoder"] == "lw-frame"
+    with av.open(str(tmp_path / "plain" / "env_0.mp4")) as video:
+        frame = next(video.decode(video=0)).to_ndarray(format="rgb24")
+    assert frame.shape[1] == 2 * 16  # the env's frame, then the predicted one (the goal below)
+    refused = swm(*args, "--decoder", "lw-frame")
+    assert refused.exit_code != 0 and "--video" in refused.output
