@@ -108,6 +108,18 @@ def test_replays_upstream(case, seed):
         assert diff.max() <= 1 and (diff > 0).mean() < 1e-3
 
 
+def test_small_frames_are_upstreams_world_frames():
+    """At 64 px the frames are what upstream's World makes of its 224-px frames (PIL bilinear)."""
+    from PIL import Image
+
+    env = TwoRoomV1Env()
+    env.set_render_size((64, 64))
+    env.reset(seed=0, options=CASES["default"])
+    theirs = REF["default_seed0/frames"][0]  # upstream's first frame of this reset, 224 px
+    expected = np.asarray(Image.fromarray(theirs).resize((64, 64), Image.BILINEAR)).astype(int)
+    assert np.abs(env.render().astype(int) - expected).mean() < 0.05
+
+
 def test_route_through_the_door_replays_upstream():
     env = make()
     env.reset(seed=0, options={"state": np.float32([60, 150]), "target_state": np.float32([170, 60])})

@@ -25,7 +25,8 @@ models trained on upstream's TwoRoom work here unchanged:
 - **Info**: upstream's ``env_name``, ``state`` / ``proprio`` (agent position), ``goal_state``
   (target position) and ``distance_to_target``; plus ``goal`` (the frame with the agent drawn at
   the target, which upstream keeps in ``_target_img`` only) and ``goal_proprio``.
-- **Rendering**: ``224 x 224`` RGB (``set_render_size`` resizes frames and the goal image): background, door, wall and border pixels, then the agent as a
+- **Rendering**: ``224 x 224`` RGB (``set_render_size`` resizes frames and the goal image with
+  PIL's bilinear filter, as upstream's World does): background, door, wall and border pixels, then the agent as a
   Gaussian dot (std = ``agent.radius``, peak normalised to 1) alpha-blended in float32 and
   truncated to uint8, as upstream; the target dot only when ``render_target`` (or the
   ``rendering.render_target`` factor) is on. The static layer is drawn once per reset and the
@@ -197,16 +198,18 @@ class TwoRoomV1Env(DatasetResetMixin, gym.Env):
         return self._sized(self._render_frame(self.agent_position))
 
     def set_render_size(self, size: tuple[int, int]) -> None:
-        """Frames and the goal image at ``size`` = (H, W): drawn at 224 x 224, then resized as
-        :class:`~stable_worldmodel.wrapper.AddPixelsWrapper` resizes (OpenCV area filter)."""
+        """Frames and the goal image at ``size`` = (H, W): drawn at 224 x 224, then resized with
+        PIL's bilinear filter, as upstream's World resizes them (so 64-px observations match
+        datasets recorded with upstream)."""
         self.render_size = check_render_size("TwoRoomV1Env", size)
 
     def _sized(self, frame: np.ndarray) -> np.ndarray:
         if self.render_size == (IMG_SIZE, IMG_SIZE):
             return frame
-        from ...wrapper._image import resize
+        from PIL import Image
 
-        return resize(frame, self.render_size)
+        h, w = self.render_size
+        return np.asarray(Image.fromarray(frame).resize((w, h), Image.BILINEAR))
 
     def eval_state(self, goal_state: np.ndarray, cur_state: np.ndarray) -> tuple[bool, float]:
         """``(success, distance)``: the agent at ``cur_state[:2]`` within 16 px of ``goal_state[:2]``."""
