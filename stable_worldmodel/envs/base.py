@@ -81,6 +81,17 @@ class DatasetResetMixin:
         return options
 
 
+def point_option(owner: str, options: Mapping[str, Any], key: str) -> np.ndarray | None:
+    """The first two numbers of reset option ``key`` as float32 ``(2,)`` (None when absent);
+    ConfigError naming ``owner`` when it has fewer than two."""
+    if options.get(key) is None:
+        return None
+    value = np.asarray(options[key], np.float32).reshape(-1)
+    if value.shape[0] < 2:
+        raise ConfigError(f"{owner} requires reset option {key!r} with at least 2 numbers, got {options[key]!r}")
+    return value[:2].copy()
+
+
 def check_variation_option(options: Mapping[str, Any] | None, names: list[str] | None = None) -> list[str] | None:
     """The factor names of reset option ``"variation"`` as a list (None when absent or empty).
 

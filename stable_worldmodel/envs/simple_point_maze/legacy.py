@@ -40,7 +40,7 @@ import numpy as np
 
 from ... import keys, spaces
 from ...errors import ConfigError, unknown_name
-from ..base import DatasetResetMixin, check_render_size, flatten_values
+from ..base import DatasetResetMixin, check_render_size, flatten_values, point_option
 from .legacy_render import NATIVE, MazeCanvas
 
 WIDTH = HEIGHT = 5.0
@@ -211,14 +211,14 @@ class SimplePointMazeV0Env(DatasetResetMixin, gym.Env):
             raise ConfigError(
                 "SimplePointMazeV0Env requires factor values inside the variation space (the log says which failed)"
             )
-        goal_option = self._point_option(options, keys.GOAL_STATE)
+        goal_option = point_option("SimplePointMazeV0Env", options, keys.GOAL_STATE)
         if goal_option is None:  # 0.1.1 draws the goal image with the agent at a fresh sample
             self._goal_agent = np.asarray(vs["agent"]["position"].sample(set_value=False), np.float32).copy()
         else:
             vs["goal"]["position"].set_value(goal_option)
             self._goal_agent = goal_option
         self._goal_img = None
-        start = self._point_option(options, keys.STATE)
+        start = point_option("SimplePointMazeV0Env", options, keys.STATE)
         if start is not None:
             vs["agent"]["position"].set_value(start)
         self.state = vs["agent"]["position"].value.copy()
@@ -245,17 +245,6 @@ class SimplePointMazeV0Env(DatasetResetMixin, gym.Env):
             self._canvas = None
 
     # -- info and drawing ---------------------------------------------------------------------
-    @staticmethod
-    def _point_option(options: dict[str, Any], key: str) -> np.ndarray | None:
-        if options.get(key) is None:
-            return None
-        value = np.asarray(options[key], np.float32).reshape(-1)
-        if value.shape[0] < 2:
-            raise ConfigError(
-                f"SimplePointMazeV0Env requires reset option {key!r} with at least 2 numbers, got {options[key]!r}"
-            )
-        return value[:2].copy()
-
     def _layout(self) -> np.ndarray:
         v = self.variation_space
         out = np.zeros(4 + 4 * self.max_walls, np.float32)

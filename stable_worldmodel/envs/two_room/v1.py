@@ -47,7 +47,7 @@ import numpy as np
 
 from ... import keys, spaces
 from ...errors import ConfigError
-from ..base import DatasetResetMixin, check_render_size
+from ..base import DatasetResetMixin, check_render_size, point_option
 
 DEFAULT_VARIATIONS = ("agent.position", "target.position")
 IMG_SIZE = 224
@@ -173,10 +173,10 @@ class TwoRoomV1Env(DatasetResetMixin, gym.Env):
             seed = int(self.np_random.integers(0, 2**31 - 1))
         spaces.reset_variation_space(self.variation_space, seed, options, DEFAULT_VARIATIONS)
         v = self.variation_space
-        agent = self._point_option(options, keys.STATE)
-        target = self._point_option(options, "target_state")
+        agent = point_option("TwoRoomV1Env", options, keys.STATE)
+        target = point_option("TwoRoomV1Env", options, "target_state")
         if target is None:
-            target = self._point_option(options, keys.GOAL_STATE)
+            target = point_option("TwoRoomV1Env", options, keys.GOAL_STATE)
         self.agent_position = v["agent"]["position"].value.astype(np.float32).copy() if agent is None else agent
         self.target_position = v["target"]["position"].value.astype(np.float32).copy() if target is None else target
         self._cache_params()
@@ -228,15 +228,6 @@ class TwoRoomV1Env(DatasetResetMixin, gym.Env):
         self._target_img = self._render_frame(self.target_position)
 
     # -- internals ----------------------------------------------------------------------------
-    @staticmethod
-    def _point_option(options: dict[str, Any], key: str) -> np.ndarray | None:
-        if options.get(key) is None:
-            return None
-        value = np.asarray(options[key], np.float32).reshape(-1)
-        if value.shape[0] < 2:
-            raise ConfigError(f"TwoRoomV1Env requires reset option {key!r} with at least 2 numbers, got {options[key]!r}")
-        return value[:2].copy()
-
     def _cache_params(self) -> None:
         v = self.variation_space
         self.wall_thickness = int(v["wall"]["thickness"].value)
