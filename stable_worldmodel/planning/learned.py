@@ -125,9 +125,9 @@ def attach_prediction_panel(policy: Any, run: str, decoder: str | None = None, *
     what it predicts with frame decoder run ``decoder`` (default: ``<run>-frame`` when it
     exists; ``swm train frame --from RUN`` makes it), so ``World.record_video`` shows it.
     Returns the decoder run used, or None when there is none to use."""
+    from ..train.trainer import resolve_device
     from ..wm.frame import FrameModel, PredictionPanel
     from ..wm.utils import checkpoint_root, load_checkpoint
-    from ..train.trainer import resolve_device
 
     name = decoder or f"{run}-frame"
     if decoder is None and not (checkpoint_root(cache_dir) / name).is_dir():
