@@ -117,11 +117,11 @@ class TrainData:
         return samplers
 
     def _fit_normalizer(self, key: str = keys.ACTION) -> Normalizer:
-        actions = self.dataset.get_col_data(key).reshape(self.dataset.num_rows, -1)
+        values = self.dataset.get_col_data(key).reshape(self.dataset.num_rows, -1)
         rows = np.concatenate(
             [np.arange(o, o + n) for o, n in zip(self.dataset.offsets[self.train_episodes], self.dataset.lengths[self.train_episodes])]
         )
-        return Normalizer.fit(actions[rows])
+        return Normalizer.fit(values[rows])
 
     @property
     def num_train(self) -> int:
@@ -146,13 +146,9 @@ class TrainData:
             generator = generator or torch.Generator().manual_seed(self.seed * 1_000_003 + int(index[0]))
             eps, starts = self.dataset._locate_many(index)
             frames = torch.cat([frames, *(self._goal_frames(self.goals[k].sample(eps, starts, generator)) for k in goal_keys)], dim=1)
-        action = torch.nan_to_num(raw[keys.ACTION].to(self.device, dtype=torch.float32), 0.0)
         cfg = self.cfg
         pixels = preprocess_images(frames.to(self.device, non_blocking=True), cfg.image_mean, cfg.image_std, cfg.image_size)
-        out = {keys.PIXELS: pixels[:, :t], keys.ACTION: self.normalizer.torch(action, repeat=cfg.frameskip)}
-        for key, norm in self.extra_normalizers.items():
-            values = raw[key].to(self.device, dtype=torch.float32)
-            out[key] = norm.torch(torch.nan_to_num(values.reshape(*values.shape[:2], -1), 0.0))
+        out = {keys.PIXELS: pixels[:, :t], **self._normalized(raw)}
         for i, key in enumerate(goal_keys):
             out[key] = pixels[:, t + i : t + i + 1]
         return out
@@ -173,13 +169,20 @@ class TrainData:
         rows = starts[:, None] + ds._row_offsets(keys.PIXELS)[None, :]  # (B, T) dataset rows of the frames
         unique, where = np.unique(rows, return_inverse=True)  # one sorted read of the memory map
         feats = torch.from_numpy(np.asarray(self.features[unique]))
-        out = {"pixels_emb": feats[torch.from_numpy(where.reshape(rows.shape))].to(self.device)}
-        action = ds._read_windows(keys.ACTION, starts).reshape(len(starts), ds.num_steps, -1)
-        action = torch.nan_to_num(torch.from_numpy(np.ascontiguousarray(action)).to(self.device, dtype=torch.float32), 0.0)
-        out[keys.ACTION] = self.normalizer.torch(action, repeat=self.cfg.frameskip)
-        for key, norm in self.extra_normalizers.items():
-            values = torch.from_numpy(np.ascontiguousarray(ds._read_windows(key, starts))).to(self.device, dtype=torch.float32)
-            out[key] = norm.torch(torch.nan_to_num(values.reshape(*values.shape[:2], -1), 0.0))
+        raw = {key: torch.from_numpy(np.ascontiguousarray(ds._read_windows(key, starts))) for key in (keys.ACTION, *self.extra_keys)}
+        raw[keys.ACTION] = raw[keys.ACTION].reshape(len(starts), ds.num_steps, -1)  # (B, span, A) -> action blocks
+        return {"pixels_emb": feats[torch.from_numpy(where.reshape(rows.shape))].to(self.device), **self._normalized(raw)}
+
+    def _normalized(self, raw: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
+        """``action`` blocks and the extra columns of ``raw`` ``(B, T, ...)`` as normalized
+        float tensors on the device (missing values, NaN, become 0 first)."""
+        out = {}
+        for key in (keys.ACTION, *self.extra_keys):
+            values = torch.nan_to_num(raw[key].to(self.device, dtype=torch.float32), 0.0)
+            if key == keys.ACTION:
+                out[key] = self.normalizer.torch(values, repeat=self.cfg.frameskip)
+            else:
+                out[key] = self.extra_normalizers[key].torch(values.reshape(*values.shape[:2], -1))
         return out
 
     def _goal_frames(self, rows: np.ndarray) -> torch.Tensor:
