@@ -12,6 +12,12 @@ the config's ``goal_probabilities`` (and ``actor_goal_pixels`` from
 ``actor_goal_probabilities`` when it is not empty), from the sample's own split. Goal frames
 are preprocessed in the same call as the window's frames, so a goal equal to a frame stays
 bit-identical to it.
+
+For a config with ``needs_reward`` (TD-MPC2), a batch also holds ``reward (B, T)`` (float32, not
+normalized): ``reward[:, k]`` is the sum of the ``frameskip`` env rewards earned by the action block
+``action[:, k]``, i.e. of the ``reward`` column on rows ``start + k * frameskip + 1`` to
+``start + (k + 1) * frameskip`` (a recorded row holds the reward of the step that led to it). The
+last step's outcome lies outside the window: its reward is 0. NaN rewards count as 0.
 """
 
 from __future__ import annotations
@@ -46,7 +52,8 @@ def split_episodes(num_episodes: int, val_fraction: float, seed: int) -> tuple[n
 class TrainData:
     """Batches of ``pixels (B, T, C, S, S)`` (preprocessed floats) and normalized
     ``action (B, T, frameskip * A)`` on ``device``, from dataset ``name``; plus normalized
-    ``proprio (B, T, P)`` when the config asks for it (``cfg.proprio_dim > 0``, PreJEPA).
+    ``proprio (B, T, P)`` when the config asks for it (``cfg.proprio_dim > 0``, PreJEPA), and
+    ``reward (B, T)`` when ``cfg.needs_reward`` (module docstring).
 
     Raises :class:`~stable_worldmodel.errors.DatasetFormatError` when a column is missing
     or no episode is long enough for one window.
@@ -70,6 +77,15 @@ class TrainData:
         if missing:
             raise DatasetFormatError(
                 f"Training requires dataset columns {missing} in {self.dataset.path}, got {sorted(self.dataset.column_names)}"
+            )
+        self.needs_reward = bool(getattr(cfg, "needs_reward", False))
+        if self.needs_reward and keys.REWARD not in self.dataset.column_names:
+            model = getattr(cfg, "model_name", "") or type(cfg).__name__
+            raise DatasetFormatError(
+                f"Training {model} requires a {keys.REWARD!r} column, got none in dataset {str(name)!r} ({self.dataset.path}), "
+                f"whose columns are {sorted(self.dataset.column_names)}. Record one: World.record_dataset(...) and "
+                "`swm collect` store the env's reward of every step as 'reward' (an env whose reward is 0 everywhere "
+                "gives nothing to learn)"
             )
         self.dataset = HDF5Dataset(
             name, frameskip=cfg.frameskip, num_steps=cfg.num_steps, keys_to_load=[keys.PIXELS, keys.ACTION, *self.extra_keys],
@@ -102,6 +118,7 @@ class TrainData:
             )
         self.normalizer = self._fit_normalizer()
         self.extra_normalizers = {key: self._fit_normalizer(key) for key in self.extra_keys}
+        self._reward_cumsum = self._cumulative_rewards() if self.needs_reward else None
         self.features: np.ndarray | None = None  # frozen-encoder features per dataset row (use_features)
         self.goals = self._goal_samplers(cfg) if isinstance(cfg, GoalConditioned) else {}
 
@@ -123,6 +140,24 @@ class TrainData:
         )
         return Normalizer.fit(values[rows])
 
+    def _cumulative_rewards(self) -> np.ndarray:
+        """``C (num_rows + 1,)`` with ``C[i]`` the sum of the rewards of rows ``< i`` (NaN as 0)."""
+        reward = np.asarray(self.dataset.get_col_data(keys.REWARD), dtype=np.float64).reshape(self.dataset.num_rows, -1)
+        return np.concatenate([[0.0], np.cumsum(np.nan_to_num(reward.sum(-1), nan=0.0))])
+
+    def _with_reward(self, index: np.ndarray, out: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
+        """``out`` plus ``reward (B, T)`` of the samples ``index`` when the config needs it (module docstring)."""
+        if not self.needs_reward:
+            return out
+        eps, steps = self.dataset._locate_many(index)
+        starts = self.dataset._sample_index()[1][eps] + steps
+        fs, t = self.cfg.frameskip, self.cfg.num_steps
+        lo = starts[:, None] + np.arange(t - 1)[None, :] * fs + 1
+        reward = np.zeros((len(index), t), dtype=np.float32)
+        reward[:, : t - 1] = self._reward_cumsum[lo + fs] - self._reward_cumsum[lo]
+        out[keys.REWARD] = torch.from_numpy(reward).to(self.device)
+        return out
+
     @property
     def num_train(self) -> int:
         return len(self.train_index)
@@ -137,7 +172,7 @@ class TrainData:
         seed and ``index[0]`` (validation batches get the same goals every time)."""
         index = np.asarray(index, dtype=np.int64)
         if self.features is not None:
-            return self._feature_batch(index)
+            return self._with_reward(index, self._feature_batch(index))
         raw = self.dataset._batch(index)
         frames = raw[keys.PIXELS]
         t = frames.shape[1]
@@ -151,7 +186,7 @@ class TrainData:
         out = {keys.PIXELS: pixels[:, :t], **self._normalized(raw)}
         for i, key in enumerate(goal_keys):
             out[key] = pixels[:, t + i : t + i + 1]
-        return out
+        return self._with_reward(index, out)
 
     def use_features(self, features: np.ndarray) -> None:
         """Serve ``pixels_emb (B, T, ...)`` gathered from ``features`` (one row per dataset row,

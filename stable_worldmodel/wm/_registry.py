@@ -21,6 +21,7 @@ _ENTRIES: dict[str, Any] = {
     "prejepa": f"{_P}.prejepa.config:PreJEPAConfig",
     "dinowm": f"{_P}.prejepa.config:PreJEPAConfig",
     "frame": f"{_P}.frame.config:FrameConfig",
+    "tdmpc2": f"{_P}.tdmpc2.config:TDMPC2Config",
 }
 
 

@@ -1,0 +1,330 @@
+"""TD-MPC2 on tiny models: shapes of every verb, SimNorm, the two-hot maths, the per-plan encoding
+cache, checkpoints, training (a tiny batch, then the trainer on a recorded toy dataset with rewards),
+the reward a batch serves, the missing-reward error and typed errors for bad inputs."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+from _tiny import ACTION_DIM, IMAGE, assert_close, images, randn
+from torch import nn
+
+import stable_worldmodel.wm as wm
+from stable_worldmodel import keys
+from stable_worldmodel.errors import ConfigError, DatasetFormatError, SpaceError, UnknownNameError
+
+A = ACTION_DIM
+#: a width-8 ConvEncoder at 16x16, a latent of 16 (2 simplices of 8), MLPs of 8, 3 Q heads, 2 transitions
+NET = dict(image_size=IMAGE, cnn_width=8, embed_dim=16, mlp_dim=8, enc_dim=8, num_q=3, num_bins=21, frameskip=1, num_preds=2)
+L = 16
+
+
+def make(seed: int = 0, **overrides) -> nn.Module:
+    torch.manual_seed(seed)
+    return wm.make("tdmpc2", "tiny", action_dim=A, **{**NET, **overrides}).eval()
+
+
+@pytest.fixture
+def model():
+    return make()
+
+
+def plan_info(b: int, s: int, t: int = 1) -> dict:
+    """What a solver passes: each env's context expanded over its S candidates."""
+    ctx = images(b, t)
+    return {keys.PIXELS: ctx.unsqueeze(1).expand(b, s, *ctx.shape[1:])}
+
+
+def batch(b: int = 4, t: int = 3, seed: int = 0) -> dict:
+    return {keys.PIXELS: images(b, t, seed=seed), keys.ACTION: randn(b, t, A, seed=seed + 1).clamp(-1, 1),
+            keys.REWARD: randn(b, t, seed=seed + 2)}
+
+
+# -- maths ------------------------------------------------------------------------------------------
+def test_simnorm_groups_sum_to_one():
+    from stable_worldmodel.wm.tdmpc2 import SimNorm
+
+    out = SimNorm(8)(randn(3, 5, 24))
+    assert out.shape == (3, 5, 24) and (out >= 0).all()
+    assert_close(out.unflatten(-1, (3, 8)).sum(-1), torch.ones(3, 5, 3))
+
+
+def test_two_hot_round_trip():
+    from stable_worldmodel.wm.tdmpc2 import symexp, symlog, two_hot, two_hot_inv
+
+    x = torch.tensor([[-50.0, -1.5, 0.0], [0.3, 2.0, 700.0]])
+    probs = two_hot(x, num_bins=101, vmin=-10.0, vmax=10.0)
+    assert probs.shape == (2, 3, 101)
+    assert_close(probs.sum(-1), torch.ones(2, 3))
+    assert ((probs > 0).sum(-1) <= 2).all()
+    assert_close(two_hot_inv(probs.clamp_min(1e-30).log(), -10.0, 10.0), x, rtol=1e-4, atol=1e-4)
+    assert_close(symexp(symlog(x)), x, rtol=1e-5, atol=1e-5)
+    # outside symexp([vmin, vmax]) the value saturates at the last bin
+    assert_close(two_hot_inv(two_hot(torch.tensor([1e6]), 11, -2.0, 2.0).clamp_min(1e-30).log(), -2.0, 2.0), symexp(torch.tensor([2.0])))
+
+
+# -- verbs ------------------------------------------------------------------------------------------
+def test_shapes_of_every_verb(model):
+    with torch.no_grad():
+        assert model.encode({keys.PIXELS: images(2, 3)})["emb"].shape == (2, 3, L)
+        z, logits = model.predict(randn(2, L), randn(2, A))
+        assert z.shape == (2, L) and logits.shape == (2, 21)
+        assert_close(z.unflatten(-1, (2, 8)).sum(-1), torch.ones(2, 2))  # the dynamics end with SimNorm
+        info = model.rollout(plan_info(2, 3), randn(2, 3, 4, A))
+        assert info["predicted_emb"].shape == (2, 3, 5, L) and info["predicted_reward"].shape == (2, 3, 4)
+        assert model.get_cost(plan_info(2, 3, t=2), randn(2, 3, 4, A)).shape == (2, 3)
+        assert model.get_cost({keys.PIXELS: images(2, 1)}, randn(2, 4, A)).shape == (2,)  # no S axis
+        assert model.get_action({keys.PIXELS: images(2, 2)}).shape == (2, A)
+        assert model.get_action({keys.PIXELS: images(2)}, horizon=3).shape == (2, 3, A)  # a warm start
+        assert model.get_action({keys.PIXELS: images(2, 1)}, horizon=3, prefix_actions=randn(2, 1, A)).shape == (2, 3, A)
+        assert model.rollout(model.encode_obs({keys.PIXELS: images(2)}), 4).shape == (2, 4, A)  # upstream's policy rollout
+        assert model.q_values(randn(2, L), randn(2, A)).shape == (3, 2)
+        action = model.get_action({keys.PIXELS: images(5, 1)})
+    assert (action.abs() <= 1).all()
+
+
+def test_cost_is_minus_the_predicted_return(model):
+    """With the reward head forced to predict 1 per step and Q heads 0, the cost is -sum(discount^t)."""
+    with torch.no_grad():
+        for head in (model.reward, *model.qs):
+            head[-1].weight.zero_()
+            head[-1].bias.zero_()
+        from stable_worldmodel.wm.tdmpc2 import two_hot
+
+        model.reward[-1].bias.copy_(two_hot(torch.tensor(1.0), 21, -10.0, 10.0).clamp_min(1e-30).log())
+        cost = model.get_cost(plan_info(1, 2), randn(1, 2, 3, A))
+    expected = -(1 + 0.99 + 0.99**2)
+    assert_close(cost, torch.full((1, 2), expected), atol=1e-2, rtol=0)
+
+
+def test_get_cost_encodes_once_per_plan(model):
+    info = plan_info(2, 3)
+    cand = randn(2, 3, 4, A)
+    with torch.no_grad():
+        first = model.get_cost(info, cand)
+        assert info["emb"].shape == (2, 3, L)
+        info[keys.PIXELS] = torch.zeros_like(info[keys.PIXELS])  # no longer read: the cached latent is used
+        assert torch.equal(model.get_cost(info, cand), first)
+
+
+def test_get_cost_same_for_per_env_and_per_candidate_infos(model):
+    b, s = 2, 3
+    per_cand = plan_info(b, s)
+    per_env = {k: v[:, 0] for k, v in per_cand.items()}
+    cand = randn(b, s, 3, A, seed=4)
+    with torch.no_grad():
+        assert_close(model.get_cost(per_env, cand), model.get_cost(per_cand, cand), atol=1e-6)
+
+
+def test_mppi_plans_on_its_cost_from_a_prior_warm_start(model):
+    import gymnasium as gym
+
+    from stable_worldmodel.policy import PlanConfig
+    from stable_worldmodel.solver import MPPISolver
+
+    solver = MPPISolver(model, num_samples=8, n_steps=2, topk=4)
+    solver.configure(action_space=gym.spaces.Box(-1.0, 1.0, (2, A), np.float32), n_envs=2, config=PlanConfig(3, 1, action_block=1))
+    info = {keys.PIXELS: images(2, 1)}
+    with torch.no_grad():
+        warm = model.get_action(info, horizon=3)
+    out = solver.solve(dict(info), init_action=warm)
+    assert out["actions"].shape == (2, 3, A) and out["costs"].shape == (2,)
+    assert torch.isfinite(out["costs"]).all()
+
+
+# -- training ---------------------------------------------------------------------------------------
+def test_loss_terms(model):
+    model.train()
+    out = model.loss(batch())
+    assert {"loss", "consistency_loss", "reward_loss", "value_loss", "pi_loss", "emb"} == set(out)
+    assert out["emb"].shape == (4, 3, L) and out["loss"].ndim == 0
+    out["loss"].backward()
+    assert all(p.grad is not None for name, p in model.named_parameters() if not name.startswith("target_qs"))
+    assert all(not p.requires_grad for p in model.target_qs.parameters())
+    # the policy term gives the Q heads no gradient: only the value term does
+    model.zero_grad()
+    model._pi_loss(randn(4, 2, L).softmax(-1)).backward()
+    assert all(p.grad is None for p in model.qs.parameters())
+    assert any(p.grad is not None for p in model.pi.parameters())
+    # in training mode each loss call moves the target heads by tau (0.01) towards the heads
+    before = [p.clone() for p in model.target_qs.parameters()]
+    with torch.no_grad():
+        for p in model.qs.parameters():
+            p.add_(1.0)
+        model.loss(batch())
+    for old, new in zip(before, model.target_qs.parameters()):
+        assert_close(new, old + 0.01, atol=1e-6, rtol=0)
+    moved = [p.clone() for p in model.target_qs.parameters()]
+    with torch.no_grad():
+        model.eval().loss(batch())  # evaluation leaves them alone
+    assert all(torch.equal(a, b) for a, b in zip(moved, model.target_qs.parameters()))
+
+
+def test_loss_decreases():
+    model = make().train()
+    data = batch(8, 3)
+    opt = torch.optim.Adam(model.parameters(), lr=3e-3)
+    torch.manual_seed(0)
+    losses = []
+    for _ in range(20):
+        out = model.loss(data)
+        opt.zero_grad()
+        out["loss"].backward()
+        opt.step()
+        losses.append(float(out["loss"].detach()))
+    assert losses[-1] < 0.7 * losses[0], losses
+
+
+def test_save_load_round_trip(model):
+    cfg = wm.get_config("tdmpc2", "tiny", **NET)
+    wm.save_pretrained(model, "td", config=cfg.target_tree(A))
+    loaded = wm.load_pretrained("td")
+    assert type(loaded).__name__ == "TDMPC2"
+    cand = randn(2, 3, 3, A)
+    with torch.no_grad():
+        assert torch.equal(loaded.get_cost(plan_info(2, 3), cand), model.get_cost(plan_info(2, 3), cand))
+    assert all(torch.equal(a, b) for a, b in zip(loaded.state_dict().values(), model.state_dict().values()))
+
+
+def test_upstream_cnn_and_proprio():
+    """Upstream's CNN (``pixel_encoder="tdmpc2"``, 64x64 -> 32 x 4 x 4) and a proprio encoder."""
+    cfg = wm.get_config("tdmpc2", "tiny", pixel_encoder="tdmpc2", num_channels=4, embed_dim=8, mlp_dim=8, enc_dim=8,
+                        num_q=2, num_bins=11, frameskip=1, proprio_dim=3, proprio_emb_dim=8)
+    model = wm.instantiate(cfg.target_tree(A)).eval()
+    assert model.pixel_encoder.in_features == 4 * 4 * 4 and model.latent_dim == 16
+    info = {keys.PIXELS: randn(2, 1, 3, 64, 64), keys.PROPRIO: randn(2, 1, 3)}
+    with torch.no_grad():
+        assert model.encode(info)["emb"].shape == (2, 1, 16)
+        assert model.get_action(info).shape == (2, A)
+    with pytest.raises(UnknownNameError, match="'proprio'"):
+        model.get_action({keys.PIXELS: randn(2, 1, 3, 64, 64)})
+
+
+# -- through the trainer ----------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def _recorded_toy(tmp_path_factory):
+    """swm/Toy-v0 expert episodes at 16x16 (its ``reward`` column included)."""
+    from stable_worldmodel import World
+    from stable_worldmodel.envs import expert_policy
+
+    root = tmp_path_factory.mktemp("toy")
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("STABLEWM_HOME", str(root))
+        with World("swm/Toy-v0", 1, (16, 16), max_episode_steps=20, verbose=0) as world:
+            world.set_policy(expert_policy("swm/Toy-v0"))
+            return world.record_dataset("toy", episodes=6, seed=0, cache_dir=root)
+
+
+def test_trains_on_the_toy_dataset(_recorded_toy, _stablewm_home):
+    import json
+    import shutil
+
+    from stable_worldmodel.train import train
+
+    _stablewm_home.mkdir(parents=True, exist_ok=True)
+    shutil.copy(_recorded_toy, _stablewm_home / "toy.h5")
+    result = train("tdmpc2", "toy", steps=2, batch_size=4, device="cpu", progress=False, name="td", val_every=0,
+                   warmup_steps=0, **{**NET, "num_preds": 1})
+    assert np.isfinite(result.train_loss)
+    loaded = wm.load_pretrained("td")
+    with torch.no_grad():
+        assert loaded.get_action({keys.PIXELS: images(1, 1)}).shape == (1, A)
+    protocol = json.loads((result.folder / "protocol.json").read_text())
+    assert protocol["model"] == "tdmpc2"
+
+
+def _write(home, name: str, columns: dict) -> str:
+    from stable_worldmodel.data.writer import HDF5Writer
+
+    home.mkdir(parents=True, exist_ok=True)
+    with HDF5Writer(home / f"{name}.h5") as writer:
+        writer.write_episodes([columns])
+    return name
+
+
+def test_batch_reward_is_the_sum_over_each_action_block(_stablewm_home):
+    from stable_worldmodel.train.data import TrainData
+
+    n = 12
+    rng = np.random.default_rng(0)
+    name = _write(_stablewm_home, "rew", {"pixels": rng.integers(0, 256, (n, IMAGE, IMAGE, 3), dtype=np.uint8),
+                                          "action": rng.normal(size=(n, A)).astype(np.float32),
+                                          "reward": np.arange(n, dtype=np.float64)})  # row i earned reward i
+    cfg = wm.get_config("tdmpc2", "tiny", **{**NET, "frameskip": 2, "num_preds": 2, "val_fraction": 0.0})
+    data = TrainData(name, cfg, seed=0, device=torch.device("cpu"))
+    out = data.batch(np.array([0, 3]))  # windows starting at rows 0 and 3 (frames every 2 rows)
+    # block k of a window starting at row s holds the actions of rows s + 2k, s + 2k + 1, whose rewards
+    # are recorded on rows s + 2k + 1 and s + 2k + 2
+    expected = torch.tensor([[1 + 2, 3 + 4, 0], [4 + 5, 6 + 7, 0]], dtype=torch.float32)
+    assert torch.equal(out[keys.REWARD], expected)
+    assert out[keys.ACTION].shape == (2, 3, 2 * A)
+
+
+def test_missing_reward_column_says_how_to_record_one(_stablewm_home):
+    from stable_worldmodel.train import train
+
+    rng = np.random.default_rng(0)
+    _write(_stablewm_home, "noreward", {"pixels": rng.integers(0, 256, (6, IMAGE, IMAGE, 3), dtype=np.uint8),
+                                        "action": rng.normal(size=(6, A)).astype(np.float32)})
+    with pytest.raises(DatasetFormatError) as err:
+        train("tdmpc2", "noreward", steps=1, batch_size=2, device="cpu", progress=False, name="x", **NET)
+    message = str(err.value)
+    for part in ("'reward'", "'noreward'", "['action', 'pixels']", "record_dataset", "swm collect", "0 everywhere"):
+        assert part in message, (part, message)
+
+
+# -- bad inputs -------------------------------------------------------------------------------------
+def test_bad_inputs_raise_typed_errors(model):
+    from stable_worldmodel.wm.tdmpc2 import SimNorm, TDMPC2
+
+    with pytest.raises(ConfigError, match="multiple of simnorm_dim=8"):
+        wm.get_config("tdmpc2", embed_dim=12)
+    with pytest.raises(ConfigError, match="history_size 1"):
+        wm.get_config("tdmpc2", history_size=2)
+    with pytest.raises(ConfigError, match="'tdmpc3'"):
+        wm.get_config("tdmpc2", pixel_encoder="tdmpc3")
+    with pytest.raises(ConfigError, match="image_size >= 35"):
+        wm.get_config("tdmpc2", pixel_encoder="tdmpc2", image_size=16)
+    with pytest.raises(ConfigError, match="num_q >= 2"):
+        wm.get_config("tdmpc2", num_q=1)
+    with pytest.raises(ConfigError, match="'mlp_dimm'"):
+        TDMPC2({"action_dim": 2, "wm": {"mlp_dimm": 8}})
+    with pytest.raises(ConfigError, match="action_dim to be a positive int, got None"):
+        TDMPC2({"wm": {}})
+    with pytest.raises(ConfigError, match="simplex_dim"):
+        SimNorm(0)
+    with pytest.raises(SpaceError, match=r"action blocks of 2 numbers, got shape \(2, 3\)"):
+        model.predict(randn(2, L), randn(2, 3))
+    with pytest.raises(UnknownNameError, match="'pixels'"):
+        model.get_cost({keys.GOAL: images(2, 1)}, randn(2, 3, 2, A))
+    with pytest.raises(UnknownNameError, match="'reward'"):
+        model.loss({k: v for k, v in batch().items() if k != keys.REWARD})
+    with pytest.raises(ConfigError, match="at least 2 frames"):
+        model.loss(batch(t=1))
+    with pytest.raises(SpaceError, match=r"\(B, S, H, A\)"):
+        model.rollout(plan_info(2, 3), randn(2, A))
+    with pytest.raises(ConfigError, match="horizon"):
+        model.get_action({keys.PIXELS: images(2, 1)}, horizon=0)
+    with pytest.raises(SpaceError, match="16, 16"):
+        model.encode({keys.PIXELS: randn(1, 1, 3, 8, 8)})
+
+
+def test_seed_module_name():
+    from stable_worldmodel.wm.tdmpc import TDMPC, TDMPC2
+
+    assert TDMPC is TDMPC2 is wm.TDMPC2
+
+
+def test_configs_need_no_torch():
+    import json
+    import subprocess
+    import sys
+
+    code = ("import sys; sys.modules['torch'] = None  # any import fails fast\n"
+            "import json, stable_worldmodel.wm as wm\n"
+            "print(json.dumps([wm.get_config('tdmpc2', p).target_tree(2) for p in ('tiny', 'small', 'paper')]))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120)
+    trees = json.loads(out.stdout)
+    assert [t["cfg"]["wm"]["encoder"] for t in trees] == ["conv", "tdmpc2", "tdmpc2"]
+    assert trees[2]["cfg"]["wm"]["encoding"] == {"pixels": 512} and trees[2]["cfg"]["action_dim"] == 10
