@@ -5,7 +5,7 @@ Importing this package is cheap; torch is imported when a model class is first u
 
     >>> import stable_worldmodel as swm
     >>> swm.wm.list_models()
-    ['dinowm', 'dummy', 'frame', 'gcbc', 'gciql', 'gcivl', 'lewm', 'pldm', 'prejepa', 'tdmpc2']
+    ['dinowm', 'dreamer', 'dummy', 'frame', 'gcbc', 'gciql', 'gcivl', 'lewm', 'pldm', 'prejepa', 'tdmpc2']
     >>> model = swm.wm.make("lewm", preset="tiny", action_dim=2)      # doctest: +SKIP
 
 The contract every model follows (shapes: ``B`` envs, ``S`` candidates, ``T`` history,
@@ -38,6 +38,7 @@ _ATTRS = {
     "GCRL": ".gcrl",
     "GCBC": ".gcbc",
     "TDMPC2": ".tdmpc2",
+    "Dreamer": ".dreamer",
     "JEPA": ".jepa",
     "SIGReg": ".loss",
     "VCReg": ".loss",

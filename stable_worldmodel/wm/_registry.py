@@ -22,6 +22,7 @@ _ENTRIES: dict[str, Any] = {
     "dinowm": f"{_P}.prejepa.config:PreJEPAConfig",
     "frame": f"{_P}.frame.config:FrameConfig",
     "tdmpc2": f"{_P}.tdmpc2.config:TDMPC2Config",
+    "dreamer": f"{_P}.dreamer.config:DreamerConfig",
 }
 
 

@@ -266,7 +266,7 @@ def refused(fit, _stablewm_home):
 
 
 def test_unknown_model_suggests_the_close_one(refused):
-    refused(UnknownNameError, r"'lewn'\. Did you mean 'lewm'\? Accepted: dinowm, dummy, frame, gcbc, gciql, gcivl, lewm, pldm, prejepa, tdmpc2", model="lewn")
+    refused(UnknownNameError, r"'lewn'\. Did you mean 'lewm'\? Accepted: dinowm, dreamer, dummy, frame, gcbc, gciql, gcivl, lewm, pldm, prejepa, tdmpc2", model="lewn")
 
 
 def test_unknown_dataset_lists_the_cached_ones(refused, toy):

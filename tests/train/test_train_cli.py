@@ -62,7 +62,7 @@ def test_epochs_bound_the_run(swm, toy):
 def test_unknown_model_is_one_line_naming_the_close_one(swm, toy, error_line, _stablewm_home):
     result = swm("train", "lewn", "--dataset", toy)
     assert result.exit_code == 1
-    assert error_line(result) == "Error: Unknown world model 'lewn'. Did you mean 'lewm'? Accepted: dinowm, dummy, frame, gcbc, gciql, gcivl, lewm, pldm, prejepa, tdmpc2"
+    assert error_line(result) == "Error: Unknown world model 'lewn'. Did you mean 'lewm'? Accepted: dinowm, dreamer, dummy, frame, gcbc, gciql, gcivl, lewm, pldm, prejepa, tdmpc2"
     assert no_runs(_stablewm_home)
 
 

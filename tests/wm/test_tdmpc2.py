@@ -202,28 +202,11 @@ def test_upstream_cnn_and_proprio():
 
 
 # -- through the trainer ----------------------------------------------------------------------------
-@pytest.fixture(scope="module")
-def _recorded_toy(tmp_path_factory):
-    """swm/Toy-v0 expert episodes at 16x16 (its ``reward`` column included)."""
-    from stable_worldmodel import World
-    from stable_worldmodel.envs import expert_policy
-
-    root = tmp_path_factory.mktemp("toy")
-    with pytest.MonkeyPatch.context() as mp:
-        mp.setenv("STABLEWM_HOME", str(root))
-        with World("swm/Toy-v0", 1, (16, 16), max_episode_steps=20, verbose=0) as world:
-            world.set_policy(expert_policy("swm/Toy-v0"))
-            return world.record_dataset("toy", episodes=6, seed=0, cache_dir=root)
-
-
-def test_trains_on_the_toy_dataset(_recorded_toy, _stablewm_home):
+def test_trains_on_the_toy_dataset(toy):
     import json
-    import shutil
 
     from stable_worldmodel.train import train
 
-    _stablewm_home.mkdir(parents=True, exist_ok=True)
-    shutil.copy(_recorded_toy, _stablewm_home / "toy.h5")
     result = train("tdmpc2", "toy", steps=2, batch_size=4, device="cpu", progress=False, name="td", val_every=0,
                    warmup_steps=0, **{**NET, "num_preds": 1})
     assert np.isfinite(result.train_loss)
