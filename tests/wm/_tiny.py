@@ -70,6 +70,19 @@ def make_tiny(name: str, seed: int = 0, **overrides):
     return wm.make(name, "tiny", action_dim=ACTION_DIM, **{**TINY, **overrides})
 
 
+def fit_losses(model: torch.nn.Module, batch: dict, steps: int = 30, lr: float = 3e-3, optimizer=torch.optim.Adam) -> list[float]:
+    """Take ``steps`` optimizer steps on ``model.loss(batch)["loss"]`` (trainable parameters only); the losses before each step."""
+    opt = optimizer([p for p in model.parameters() if p.requires_grad], lr=lr)
+    losses = []
+    for _ in range(steps):
+        loss = model.loss(batch)["loss"]
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+        losses.append(float(loss.detach()))
+    return losses
+
+
 def assert_close(actual: torch.Tensor, expected: torch.Tensor, rtol: float = 1e-5, atol: float = 1e-6) -> None:
     """``torch.allclose`` with shapes checked (``torch.testing.assert_close`` costs ~1.5 s on first call)."""
     expected = torch.as_tensor(expected, dtype=actual.dtype)

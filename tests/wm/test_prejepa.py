@@ -9,7 +9,7 @@ import json
 import numpy as np
 import pytest
 import torch
-from _tiny import ACTION_DIM, IMAGE, assert_close, images, randn
+from _tiny import ACTION_DIM, IMAGE, assert_close, fit_losses, images, randn
 from torch import nn
 
 import stable_worldmodel.wm as wm
@@ -228,14 +228,7 @@ def test_loss_terms(proprio_model, dot_data):
 def test_loss_decreases(dot_data):
     model = make().train()
     batch = dot_data(8, 3)
-    opt = torch.optim.Adam([p for p in model.parameters() if p.requires_grad], lr=3e-3)
-    losses = []
-    for _ in range(30):
-        loss = model.loss(batch)["loss"]
-        opt.zero_grad()
-        loss.backward()
-        opt.step()
-        losses.append(float(loss))
+    losses = fit_losses(model, batch)
     assert losses[-1] < 0.5 * losses[0], losses
 
 

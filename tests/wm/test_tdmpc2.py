@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import torch
-from _tiny import ACTION_DIM, IMAGE, assert_close, images, randn
+from _tiny import ACTION_DIM, IMAGE, assert_close, fit_losses, images, randn
 from torch import nn
 
 import stable_worldmodel.wm as wm
@@ -164,15 +164,8 @@ def test_loss_terms(model):
 def test_loss_decreases():
     model = make().train()
     data = batch(8, 3)
-    opt = torch.optim.Adam(model.parameters(), lr=3e-3)
     torch.manual_seed(0)
-    losses = []
-    for _ in range(20):
-        out = model.loss(data)
-        opt.zero_grad()
-        out["loss"].backward()
-        opt.step()
-        losses.append(float(out["loss"].detach()))
+    losses = fit_losses(model, data, steps=20)
     assert losses[-1] < 0.7 * losses[0], losses
 
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import torch
-from _tiny import ACTION_DIM, IMAGE, assert_close, condition_on_actions, images, randn
+from _tiny import ACTION_DIM, IMAGE, assert_close, condition_on_actions, fit_losses, images, randn
 
 from stable_worldmodel import keys
 from stable_worldmodel.errors import ConfigError
@@ -249,14 +249,7 @@ def test_dummy_loss(dummy, dot_data):
 def test_training_lowers_the_loss(make_model, dot_data, name, overrides):
     model = make_model(name, **overrides).train()
     data = dot_data(8, 3)
-    opt = torch.optim.AdamW(model.parameters(), lr=3e-3 if name != "dummy" else 1e-3)
-    losses = []
-    for _ in range(30):
-        loss = model.loss(data)["loss"]
-        opt.zero_grad()
-        loss.backward()
-        opt.step()
-        losses.append(loss.item())
+    losses = fit_losses(model, data, lr=3e-3 if name != "dummy" else 1e-3, optimizer=torch.optim.AdamW)
     first, last = np.mean(losses[:3]), np.mean(losses[-5:])
     assert np.isfinite(losses).all()
     assert last < 0.7 * first, f"{name}: loss {first:.4f} -> {last:.4f}"
