@@ -16,7 +16,19 @@ EXTRAS = {
     "decord": "video",
     "hypothesis": "dev",
     "transformers": "vit",
+    "dm_control": "mujoco",
+    "ogbench": "mujoco",
 }
+#: env tag -> the modules its extra installs (``swm envs`` marks envs whose extra is missing)
+EXTRA_MODULES = {"mujoco": ("mujoco", "dm_control", "ogbench")}
+
+
+def missing_extra(tags) -> str | None:
+    """The extra an env with ``tags`` needs and that is not (fully) installed, else None."""
+    for extra, modules in EXTRA_MODULES.items():
+        if extra in tags and not all(is_available(m) for m in modules):
+            return extra
+    return None
 
 
 def is_available(module: str) -> bool:

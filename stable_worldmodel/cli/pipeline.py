@@ -140,8 +140,13 @@ def eval_cmd(
 
 
 def _factor_count(env_id: str) -> str:
+    from .._optional import missing_extra
+    from ..envs import get_entry
     from .worlds import variation_space_of
 
+    extra = missing_extra(get_entry(env_id).tags)
+    if extra:
+        return f'n/a: pip install "stable-worldmodel[{extra}]"'
     try:
         space = variation_space_of(env_id)
     except ImportError as exc:  # an optional extra or an env family that is not installed

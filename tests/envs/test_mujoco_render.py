@@ -1,0 +1,82 @@
+"""Headless MuJoCo rendering: backend choice, render quality, and closing renderers safely."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from stable_worldmodel._optional import is_available
+from stable_worldmodel.envs import mujoco_render
+from stable_worldmodel.errors import ConfigError, DependencyNotInstalled
+
+# never import mujoco here before setup_gl(): it picks its GL backend on import
+pytestmark = pytest.mark.skipif(not is_available("mujoco"), reason="extra 'mujoco' not installed")
+
+XML = """<mujoco><visual><global offwidth="16" offheight="16"/></visual><worldbody>
+<light pos="0 0 2" castshadow="true"/><geom type="plane" size="1 1 .1" rgba=".3 .6 .3 1"/>
+<geom type="box" size=".1 .1 .1" pos="0 0 .1" rgba="1 0 0 1"/>
+<camera name="c" pos="0 -1 .6" xyaxes="1 0 0 0 .5 1"/></worldbody></mujoco>"""
+
+
+@pytest.fixture(scope="module")
+def scene():
+    mujoco_render.setup_gl()
+    import mujoco
+
+    model = mujoco.MjModel.from_xml_string(XML)
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    return model, data
+
+
+def test_setup_gl_picks_egl_headless_and_refuses_a_mismatched_platform():
+    code = (
+        "import os; os.environ.pop('DISPLAY', None); os.environ.pop('WAYLAND_DISPLAY', None);"
+        "os.environ.pop('MUJOCO_GL', None); os.environ.pop('PYOPENGL_PLATFORM', None);"
+        "from stable_worldmodel.envs.mujoco_render import setup_gl; print(setup_gl(), os.environ['PYOPENGL_PLATFORM'])"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert out.stdout.split() == ["egl", "egl"]
+
+
+def test_setup_gl_errors(monkeypatch):
+    monkeypatch.setenv("MUJOCO_GL", "egl")
+    monkeypatch.setenv("PYOPENGL_PLATFORM", "osmesa")
+    with pytest.raises(ConfigError, match="PYOPENGL_PLATFORM unset or 'egl', got 'osmesa'"):
+        mujoco_render.setup_gl()
+    from stable_worldmodel import _optional
+
+    monkeypatch.setattr(_optional, "is_available", lambda m: m != "dm_control")
+    with pytest.raises(DependencyNotInstalled, match=r'dm_control.*pip install "stable-worldmodel\[mujoco\]"'):
+        mujoco_render.setup_gl()
+
+
+def test_render_quality_and_its_errors(scene):
+    model, data = scene
+    frames = {}
+    for quality in mujoco_render.RENDER_QUALITIES:
+        r = mujoco_render.MjRenderer(model, 16, 16, quality)
+        frames[quality] = r.render(data, "c").astype(np.int64)
+        r.close()
+        assert frames[quality].shape == (16, 16, 3)
+    assert model.vis.quality.shadowsize == 4096  # the model's settings are restored
+    assert np.abs(frames["medium"] - frames["high"]).mean() < 2.0  # the same picture
+    assert np.abs(frames["low"] - frames["high"]).mean() > 2.0  # no shadows
+    with pytest.raises(ConfigError, match="render_quality in \\['low', 'medium', 'high'\\], got 'hihg'. Did you mean 'high'"):
+        mujoco_render.MjRenderer(model, 16, 16, "hihg")
+
+
+def test_closing_one_renderer_leaves_the_other_intact(scene):
+    model, data = scene
+    a, b = mujoco_render.MjRenderer(model, 16, 16), mujoco_render.MjRenderer(model, 16, 16)
+    ref = a.render(data, "c")
+    b.render(data, "c")  # b's context is now the current one
+    b.close()
+    np.testing.assert_array_equal(a.render(data, "c"), ref)
+    b.close()  # closing twice is harmless
+    with pytest.raises(RuntimeError, match="after close"):
+        b.render(data, "c")
+    a.close()
