@@ -40,8 +40,10 @@ def train_cmd(
 
     Example: swm train lewm --dataset tworoom --preset tiny --name tr-lewm
     (then: swm eval swm/TwoRoom-v2 --policy wm:tr-lewm; a gcbc / gcivl / gciql run: --policy gc:RUN;
-    swm train frame --from tr-lewm trains the decoder that swm eval --video shows the predictions with)
+    swm train frame --from tr-lewm trains the decoder that swm eval --video shows the predictions with).
+    Several processes (DDP; --batch-size is the global batch): torchrun --nproc-per-node N -m stable_worldmodel.cli train ...
     """
+    import os
     import sys
 
     from ..train import train
@@ -58,6 +60,8 @@ def train_cmd(
         model, dataset, preset, steps=steps, epochs=epochs, batch_size=batch_size, lr=lr, device=device,
         precision=precision, name=name, seed=seed, resume=resume, progress=sys.stderr.isatty(), **overrides,
     )
+    if os.environ.get("RANK", "0") != "0":  # torchrun: process 0 reports
+        return
     val = f"{result.val_loss:.4f}" if result.val_loss is not None else "n/a"
     out.print(
         f"Trained {model} ({preset}) on {dataset or 'the dataset of ' + str(source)}: {result.steps} steps in {result.seconds:.0f} s "

@@ -31,6 +31,19 @@ def _positive(name: str, value: Any) -> int | None:
     return value
 
 
+class _NoLog:
+    """The metrics log of processes other than 0 under distributed training: writes nothing."""
+
+    def log(self, record: dict[str, Any]) -> None:
+        pass
+
+    def read(self) -> list[dict[str, Any]]:
+        return []
+
+    def close(self) -> None:
+        pass
+
+
 def train(
     model: str,
     dataset: str | None,
@@ -62,7 +75,9 @@ def train(
     ``protocol.json`` go to ``<cache>/checkpoints/<name>/`` (default name ``<dataset>-<model>``),
     with metrics (``metrics.jsonl``, ``metrics.csv``, TensorBoard when installed) and ``loss.png``.
     ``resume=True`` continues the run of that name from its last checkpoint (same result as
-    an uninterrupted run); otherwise an existing run folder is an error. A model with a frozen
+    an uninterrupted run); otherwise an existing run folder is an error. Under ``torchrun
+    --nproc-per-node N`` the run is data-parallel over N processes (:mod:`.distributed`;
+    ``batch_size`` is the global batch). A model with a frozen
     encoder (PreJEPA) trains on its features, computed once per dataset and encoder and kept on
     disk (:mod:`stable_worldmodel.train.features`; ``feature_cache=False`` encodes every batch).
     """
@@ -72,6 +87,7 @@ def train(
 
     from ..wm import get_config
     from ..wm import utils as wmu
+    from . import distributed
     from .data import TrainData
     from .run import STATE_NAME, MetricsLog
     from .trainer import Trainer, resolve_device
@@ -93,7 +109,7 @@ def train(
         dataset = getattr(cfg, "source_dataset", None)
         if not dataset:
             raise ConfigError(f"train requires a dataset name for {model!r}, got None")
-    dev = resolve_device(device)
+    dist_info, dev = distributed.setup(resolve_device(device), cfg.batch_size)
     run = name or getattr(cfg, "default_run", None) or f"{dataset}-{model}"
     if not run or "/" in run or "\\" in run or run.startswith("."):
         raise ConfigError(f"train requires a plain run name (no path), got {run!r}")
@@ -103,6 +119,7 @@ def train(
         raise FileNotFoundError(f"train(resume=True) requires a previous run with {state_path}, which does not exist")
     if not resume and folder.exists():
         raise FileExistsError(f"Run folder {folder} exists: pass resume=True (--resume) to continue it, or another name")
+    distributed.barrier(dist_info)  # every process has checked before process 0 creates the folder
 
     torch.manual_seed(seed)
     data = TrainData(dataset, cfg, seed=seed, device=dev, cache_dir=cache_dir)
@@ -119,7 +136,11 @@ def train(
     if feature_cache and callable(frozen) and not data.goals:
         from .features import load_or_compute_features
 
+        if not dist_info.is_main:
+            distributed.barrier(dist_info)  # process 0 computes the cache, the others read it
         features = load_or_compute_features(data.dataset, net.to(dev).encode_pixels, frozen(), cfg, dev)
+        if dist_info.is_main:
+            distributed.barrier(dist_info)
         data.use_features(features.features)
         logger.info("%s", features.describe())
     protocol = {
@@ -144,19 +165,24 @@ def train(
     trainer = Trainer(
         net, data, cfg, folder=folder, run=run, device=dev, precision=precision, seed=seed, steps=steps,
         log_every=log_every, val_every=val_every, ckpt_every=ckpt_every, progress=progress, config_tree=tree, protocol=protocol,
+        dist=dist_info,
     )
-    folder.mkdir(parents=True, exist_ok=True)
+    if dist_info.enabled:
+        protocol["distributed"] = {"processes": dist_info.world_size, "backend": "nccl" if dev.type == "cuda" else "gloo"}
+    if dist_info.is_main:
+        folder.mkdir(parents=True, exist_ok=True)
     if resume:
         state = torch.load(state_path, map_location=dev, weights_only=False)
         if int(state.get("steps", steps)) != steps:
             raise ConfigError(f"train(resume=True) requires the same number of steps as the run ({state.get('steps')}), got {steps}")
         trainer.load_state_dict(state)
     try:
-        log = MetricsLog(folder, resume_step=trainer.step if resume else None)
+        log = MetricsLog(folder, resume_step=trainer.step if resume else None) if dist_info.is_main else _NoLog()
         result = trainer.fit(log)
         result.features = features
+        distributed.cleanup(dist_info)
         return result
     except BaseException:
-        if not resume and trainer.step == 0 and not any(folder.glob("*.pt")):
+        if dist_info.is_main and not resume and trainer.step == 0 and not any(folder.glob("*.pt")):
             shutil.rmtree(folder, ignore_errors=True)  # nothing worth keeping
         raise

@@ -225,10 +225,13 @@ class TrainData:
         frames = np.stack([self.dataset._read(keys.PIXELS, int(r), int(r) + 1)[0] for r in rows])  # (B, H, W, C)
         return torch.from_numpy(np.ascontiguousarray(frames)).permute(0, 3, 1, 2).unsqueeze(1)
 
+    def train_pick(self, generator: torch.Generator, batch_size: int) -> np.ndarray:
+        """The sample ids of a train batch of ``batch_size``, drawn uniformly (with replacement) by ``generator``."""
+        return self.train_index[torch.randint(self.num_train, (batch_size,), generator=generator).numpy()]
+
     def train_batch(self, generator: torch.Generator, batch_size: int) -> dict[str, torch.Tensor]:
         """A train batch of ``batch_size`` samples drawn uniformly (with replacement) by ``generator``."""
-        pick = torch.randint(self.num_train, (batch_size,), generator=generator).numpy()
-        return self.batch(self.train_index[pick], generator)
+        return self.batch(self.train_pick(generator, batch_size), generator)
 
     def val_batches(self, batch_size: int, max_samples: int) -> list[np.ndarray]:
         """Fixed validation index batches (evenly spread over the validation samples), of at most

@@ -6,7 +6,7 @@ decay, gradient clipping, autocast (bf16 / fp16 with a grad scaler) where the de
 supports it, validation loss, an embedding-collapse monitor (per-dim std of the
 embeddings), periodic checkpoints plus the last one, and exact resume: model, optimizer,
 scheduler, scaler, every RNG and the step are restored, so a resumed run equals an
-uninterrupted one.
+uninterrupted one. Under ``torchrun`` the step runs data-parallel (:mod:`.distributed`).
 """
 
 from __future__ import annotations
@@ -25,6 +25,8 @@ import torch
 
 from ..errors import ConfigError
 from ..wm import utils as wmu
+from . import distributed
+from .distributed import DistInfo
 from .run import STATE_NAME, MetricsLog, plot_losses
 
 logger = logging.getLogger(__name__)
@@ -94,12 +96,28 @@ class TrainResult:
     features: Any = None
 
 
+class _Loss(torch.nn.Module):
+    """``forward(batch) = model.loss(batch)``: what DDP wraps (it hooks ``forward`` only)."""
+
+    def __init__(self, model: torch.nn.Module):
+        super().__init__()
+        self.model = model
+
+    def forward(self, batch: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
+        return self.model.loss(batch)
+
+
 class Trainer:
-    """Trains ``model`` on ``data`` (:class:`~stable_worldmodel.train.data.TrainData`) into ``folder``."""
+    """Trains ``model`` on ``data`` (:class:`~stable_worldmodel.train.data.TrainData`) into ``folder``.
+
+    With ``dist`` (one process of a ``torchrun`` group) each step trains on this process's slice
+    of the global batch under DDP; only process 0 logs, validates and saves.
+    """
 
     def __init__(self, model: torch.nn.Module, data: Any, cfg: Any, *, folder: Path, run: str, device: torch.device,
                  precision: str = "32", seed: int = 0, steps: int, log_every: int = 10, val_every: int = 0,
-                 ckpt_every: int = 0, val_samples: int = 512, progress: bool = True, config_tree: dict, protocol: dict):
+                 ckpt_every: int = 0, val_samples: int = 512, progress: bool = True, config_tree: dict, protocol: dict,
+                 dist: DistInfo | None = None):
         if precision not in PRECISIONS:
             raise ConfigError(f"Training requires precision in {PRECISIONS}, got {precision!r}")
         if precision == "16" and device.type != "cuda":
@@ -113,6 +131,13 @@ class Trainer:
         self.scheduler = torch.optim.lr_scheduler.LambdaLR(self.optimizer, _schedule(cfg.warmup_steps, steps))
         self.scaler = torch.amp.GradScaler(device.type, enabled=precision == "16")
         self.generator = torch.Generator().manual_seed(seed)
+        self.dist = dist or DistInfo()
+        self.ddp = None
+        if self.dist.enabled:
+            from torch.nn.parallel import DistributedDataParallel
+
+            distributed.global_batch_norm(self.model)
+            self.ddp = DistributedDataParallel(_Loss(self.model), device_ids=[device] if device.type == "cuda" else None)
         self.step = 0
         self.window: list[Any] = []  # train losses (floats or 0-d tensors) since the last log (checkpointed, for exact resume)
         self._collapse_warned = False
@@ -152,7 +177,9 @@ class Trainer:
         self.generator.set_state(rng["batches"])
 
     def save(self, final: bool = False) -> None:
-        """Write the model (run folder and ``step_<N>/``) and the training state."""
+        """Write the model (run folder and ``step_<N>/``) and the training state (process 0 only)."""
+        if not self.dist.is_main:
+            return
         protocol = {**self.protocol, "steps_done": self.step}
         for where in ([self.folder] + ([self.folder / f"step_{self.step:06d}"] if not final else [])):
             where.mkdir(parents=True, exist_ok=True)
@@ -174,7 +201,21 @@ class Trainer:
             self._collapse_warned = True
         return out
 
+    def _train_step_loss(self, bs: int) -> dict[str, torch.Tensor]:
+        if self.ddp is None:
+            batch = self.data.train_batch(self.generator, bs)
+            with self._autocast():
+                return self.model.loss(batch)
+        index = self.dist.shard(self.data.train_pick(self.generator, bs))  # same global pick everywhere
+        # goals (goal-conditioned models) from a per-step, per-process stream: the shared pick stream stays in step
+        goals = torch.Generator().manual_seed((self.seed * 1_000_003 + self.step) * 4099 + self.dist.rank)
+        batch = self.data.batch(index, goals)
+        with self._autocast(), distributed.global_batch():
+            return self.ddp(batch)
+
     def validate(self) -> float | None:
+        if not self.dist.is_main:
+            return None
         batches = self.data.val_batches(self.cfg.batch_size, self.val_samples)
         if not batches:
             return None
@@ -198,12 +239,12 @@ class Trainer:
         logged = log.read()  # a resumed run's records up to its step (a finished run has no step left to log)
         last_loss = next((r["train/loss"] for r in reversed(logged) if "train/loss" in r), float("nan"))
         val_loss = next((r["val/loss"] for r in logged if "val/loss" in r and r.get("step") == self.step), None)
-        bar = tqdm(total=self.steps, initial=self.step, desc=f"train {self.run}", unit="step", disable=not self.progress, dynamic_ncols=True)
+        main = self.dist.is_main
+        bar = tqdm(total=self.steps, initial=self.step, desc=f"train {self.run}", unit="step",
+                   disable=not (self.progress and main), dynamic_ncols=True)
         try:
             while self.step < self.steps:
-                batch = self.data.train_batch(self.generator, bs)
-                with self._autocast():
-                    out = self.model.loss(batch)
+                out = self._train_step_loss(bs)
                 loss = out["loss"]
                 self.optimizer.zero_grad(set_to_none=True)
                 self.scaler.scale(loss).backward()
@@ -219,11 +260,11 @@ class Trainer:
                 if self.step % self.log_every == 0 or self.step == self.steps:
                     losses = [float(v) for v in self.window]
                     self.window.clear()
-                    if not all(math.isfinite(v) for v in losses):
+                    last_loss = distributed.mean_over_processes(self.dist, sum(losses) / len(losses))
+                    if not math.isfinite(last_loss):  # the same verdict in every process
                         raise FloatingPointError(
                             f"Training diverged: loss {losses} in the {len(losses)} steps up to step {self.step}; lower --lr or use --precision 32"
                         )
-                    last_loss = sum(losses) / len(losses)
                     rate = (self.step - start_step) * bs / max(time.perf_counter() - start, 1e-9)
                     record = {"step": self.step, "train/loss": last_loss, "lr": self.scheduler.get_last_lr()[0], "samples_per_s": rate}
                     record.update({f"train/{k}": float(v.detach()) for k, v in out.items() if k != "loss" and torch.is_tensor(v) and v.ndim == 0})
@@ -233,7 +274,8 @@ class Trainer:
                         val_loss = self.validate()
                         if val_loss is not None:
                             record["val/loss"] = val_loss
-                    log.log(record)
+                    if main:
+                        log.log(record)
                     bar.set_postfix(loss=f"{last_loss:.4f}", samples_s=f"{rate:.0f}")
                 if self.ckpt_every and self.step % self.ckpt_every == 0 and self.step < self.steps:
                     self.save()
@@ -248,6 +290,7 @@ class Trainer:
         self.save(final=True)
         log.close()
         records = log.read()
-        plot_losses(records, self.folder / "loss.png", f"{self.run}: {self.protocol.get('model')} on {self.protocol.get('dataset')}")
+        if main:
+            plot_losses(records, self.folder / "loss.png", f"{self.run}: {self.protocol.get('model')} on {self.protocol.get('dataset')}")
         rate = (self.step - start_step) * bs / max(seconds, 1e-9)
         return TrainResult(self.run, self.folder, self.step, last_loss, val_loss, seconds, rate, records)

@@ -31,6 +31,10 @@ class SIGReg(nn.Module):
 
     ``generator``: an optional ``torch.Generator`` for the directions (the default draws
     from the global RNG, so seeding torch makes training reproducible).
+
+    Under distributed training the batch is gathered from every process first
+    (:func:`stable_worldmodel.train.distributed.gather_batch`): the statistic and its gradients
+    are those of the global batch.
     """
 
     def __init__(self, knots: int = 17, num_proj: int = 1024):
@@ -48,6 +52,9 @@ class SIGReg(nn.Module):
         self.register_buffer("weights", trapezoid * window)
 
     def forward(self, proj: torch.Tensor, generator: torch.Generator | None = None) -> torch.Tensor:
+        from ..train.distributed import gather_batch
+
+        proj = gather_batch(proj, dim=-2)
         directions = torch.randn(proj.shape[-1], self.num_proj, device=proj.device, generator=generator)
         directions = directions / directions.norm(dim=0, keepdim=True)
         x = proj.float() @ directions  # (..., B, P)
@@ -63,7 +70,8 @@ class VCReg(nn.Module):
 
     ``forward(z)`` with ``z: (B, T, D)`` returns ``std_loss`` (mean hinge ``relu(1 - std)``
     of each dim over the batch), ``cov_loss`` (mean squared off-diagonal covariance over
-    the batch), and ``std_t_loss`` / ``cov_t_loss``, the same over time.
+    the batch), and ``std_t_loss`` / ``cov_t_loss``, the same over time. Under distributed
+    training the batch is gathered from every process first, as for :class:`SIGReg`.
     """
 
     def __init__(self, eps: float = 1e-4):
@@ -85,8 +93,11 @@ class VCReg(nn.Module):
         return (off / max(d * d - d, 1)).mean()
 
     def forward(self, z: torch.Tensor) -> dict[str, torch.Tensor]:
+        from ..train.distributed import gather_batch
+
         if z.dim() == 2:
             z = z.unsqueeze(1)
+        z = gather_batch(z, dim=0)
         z = z - z.mean(dim=0, keepdim=True)
         zt = z.transpose(0, 1)  # (T, B, D): statistics over time (of the batch-centred z)
         return {
