@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -79,7 +79,7 @@ def collect(
 
 def eval_cmd(
     env: EnvArg,
-    policy: Annotated[str, typer.Option("--policy", "-p", metavar="POLICY", help="random, expert, wm:RUN (plan with checkpoint RUN, see `swm list model`) or gc:RUN (act with the goal-conditioned policy RUN: gcbc, gcivl, gciql).")] = "random",
+    policy: Annotated[str, typer.Option("--policy", "-p", metavar="POLICY", help="random, expert, wm:RUN (plan with checkpoint RUN, see `swm list model`) or gc:RUN (act with the goal-conditioned policy RUN: gcbc, gcivl, gciql). With --fov-sweep, several: P1,P2.")] = "random",
     episodes: Annotated[int, typer.Option("--episodes", "-n", parser=int_in(1), metavar="N", help="Episodes to evaluate.")] = 20,
     seed: SeedOpt = 0,
     variation: VariationOpt = None,
@@ -99,18 +99,26 @@ def eval_cmd(
     goal_offset: Annotated[int, typer.Option("--goal-offset", parser=int_in(1), metavar="G", help="With --from-dataset: the goal is the state G steps later.")] = 25,
     budget: Annotated[int, typer.Option("--budget", parser=int_in(1), metavar="N", help="With --from-dataset: steps allowed to reach the goal.")] = 50,
     decoder: Annotated[str | None, typer.Option("--decoder", metavar="RUN", help="With --video and wm:RUN: the frame decoder that shows what the model predicts (default: RUN-frame when it exists).", show_default=False)] = None,
+    fov_sweep: Annotated[str | None, typer.Option("--fov-sweep", metavar="FACTORS", help="Generalization report: evaluate in distribution, with each factor (all: every factor group; or F1,F2) resampled, and with all resampled, on the same seeds; a table, a heatmap PNG (beside --json, or --plot) and the JSON.", show_default=False)] = None,
+    plot: Annotated[Path | None, typer.Option("--plot", metavar="FILE", help="With --fov-sweep: where the heatmap PNG goes (default: beside --json, else fov-sweep-ENV.png).", dir_okay=False, show_default=False)] = None,
 ) -> None:
     """Evaluate a policy on ENV and print its success rate with a 95% confidence interval.
 
     Example: swm eval swm/TwoRoom-v2 --policy wm:tr-lewm --solver cem --episodes 50 --num-envs 10 --json out.json
-    (or --policy gc:tr-gcbc for a policy trained with `swm train gcbc`)
+    (or --policy gc:tr-gcbc for a policy trained with `swm train gcbc`;
+    swm eval swm/TwoRoom-v2 --policy expert,wm:tr-lewm --fov-sweep all --json sweep.json: the generalization report)
     """
     from .display import console, success_table
     from .evaluation import evaluate_cli
     from .worlds import check_policy, episode_limit, resolve_env
 
     env = resolve_env(env)
-    policy = check_policy(policy)
+    if fov_sweep is not None:
+        if video is not None or from_dataset is not None or variation:
+            raise typer.BadParameter("cannot be combined with --video, --from-dataset or --variation (the sweep sets the factors)", param_hint="--fov-sweep")
+        policies = [check_policy(p.strip()) for p in policy.split(",") if p.strip()]
+    else:
+        policy = check_policy(policy)
     if video is not None:
         video = output_dir(video, "swm eval --video")
     if json_path is not None:
@@ -118,12 +126,16 @@ def eval_cmd(
     if decoder is not None and (video is None or not policy.startswith("wm:")):
         raise typer.BadParameter("requires --video DIR and a wm:RUN policy (it decodes what the model predicts)", param_hint="--decoder")
     plan = None
-    if policy.startswith("wm:"):
+    if any(p.startswith("wm:") for p in (policies if fov_sweep is not None else [policy])):
         from ..planning.learned import PlanSettings
 
         plan = PlanSettings(solver=solver, horizon=horizon, receding_horizon=receding_horizon, samples=samples, iterations=iterations, seed=seed, cost=cost)
     max_steps = episode_limit(env, max_steps)
     out = console()
+    if fov_sweep is not None:
+        _fov_sweep(env, policies, fov_sweep, json_path, plot, episodes=episodes, seed=seed, num_envs=num_envs, max_steps=max_steps,
+                   image_size=image_size, plan=plan, device=device)
+        return
     summary, title, record = evaluate_cli(
         env, policy, episodes=episodes, seed=seed, variation=variation or [], num_envs=num_envs, max_steps=max_steps,
         image_size=image_size, plan=plan, device=device, from_dataset=from_dataset, goal_offset=goal_offset, budget=budget,
@@ -174,6 +186,30 @@ def envs(tag: Annotated[str | None, typer.Option("--tag", metavar="TAG", help="O
         entry = get_entry(env_id)
         table.add_row(env_id, _factor_count(env_id), ", ".join(entry.tags), "yes" if entry.expert else "no")
     console().print(table)
+
+
+def _fov_sweep(env: str, policies: list[str], factors: str, json_path: Path | None, plot: Path | None, *, plan: Any, **kwargs: Any) -> None:
+    """``swm eval --fov-sweep``: the generalization report (:mod:`.sweep`)."""
+    import json
+
+    from .display import console
+    from .evaluation import evaluate_cli
+    from .sweep import run_sweep, sweep_heatmap, sweep_json, sweep_table
+
+    def evaluate(env: str, policy: str, variation: list[str], **kw: Any):
+        return evaluate_cli(env, policy, variation=variation, plan=plan if policy.startswith("wm:") else None, **kw)
+
+    report = run_sweep(env, policies, factors, evaluate=evaluate, **kwargs)
+    out = console()
+    out.print(sweep_table(report))
+    png = plot or (json_path.with_suffix(".png") if json_path is not None else Path(f"fov-sweep-{env.split('/')[-1]}.png"))
+    out.print(f"Heatmap: {sweep_heatmap(report, png)}", soft_wrap=True)
+    if json_path is not None:
+        protocol = {k: v for k, v in kwargs.items()}
+        if plan is not None:
+            protocol["plan"] = plan.as_dict()
+        json_path.write_text(json.dumps(sweep_json(report, protocol), indent=2) + "\n")
+        out.print(f"Results: {json_path}", soft_wrap=True)
 
 
 def fovs(env: EnvArg) -> None:

@@ -183,3 +183,42 @@ def test_dataset_starts_are_seeded_valid_and_distinct_while_possible():
     assert len(eps) == 9 and len(set(zip(eps, starts))) == 8
     with pytest.raises(ConfigError, match="--goal-offset 8"):
         dataset_starts(data, 2, goal_offset=8, seed=0)
+
+
+# -- the generalization report ---------------------------------------------------------------
+def test_fov_sweep_reports_each_factor_for_expert_random_and_a_learned_model(swm, home, tmp_path):
+    out = tmp_path / "sweep.json"
+    policies = f"expert,random,wm:{RUN}"
+    args = ("eval", TOY, "--policy", policies, "--fov-sweep", "all", "-n", "2", "--max-steps", "15", *PLAN, *SMALL)
+    result = swm(*args, "--json", str(out))
+    assert result.exit_code == 0, result.output
+    report = json.loads(out.read_text())
+    settings = ["in distribution", "agent", "goal", "background", "all factors"]  # the env's factor groups
+    assert report["settings"] == settings and list(report["results"]) == ["expert", "random", f"wm:{RUN}"]
+    assert report["protocol"]["episodes"] == 2 and report["protocol"]["plan"]["samples"] == 16
+    for rows in report["results"].values():
+        assert [r["setting"] for r in rows] == settings
+        assert [r["variation"] for r in rows] == [[], ["agent"], ["goal"], ["background"], ["all"]]
+        base = rows[0]["success_rate"]
+        for r in rows:
+            assert len(r["episode_successes"]) == 2
+            assert r["success_rate"] == pytest.approx(50 * sum(r["episode_successes"]))
+            assert r["drop"] == pytest.approx(r["success_rate"] - base)
+    assert report["results"]["expert"][0]["success_rate"] == 100.0
+    png = out.with_suffix(".png")
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert f"Heatmap: {png}" in result.stdout and "all factors" in result.stdout
+
+
+@pytest.mark.parametrize(
+    ("extra", "needle"),
+    [
+        (("--fov-sweep", "agnt"), "Did you mean one of 'agent'"),
+        (("--fov-sweep", "all", "--variation", "agent"), "cannot be combined"),
+        (("--fov-sweep", " , "), "requires 'all' or comma-separated factor names"),
+    ],
+)
+def test_fov_sweep_bad_input_is_one_line(swm, home, error_line, extra, needle):
+    result = swm("eval", TOY, "--policy", "expert", "-n", "1", *SMALL, *extra)
+    assert result.exit_code != 0
+    assert needle in error_line(result)

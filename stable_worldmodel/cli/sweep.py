@@ -1,0 +1,130 @@
+"""The generalization report: success in distribution and with each factor of variation shifted.
+
+``swm eval ENV --policy P[,P2...] --fov-sweep all|F1,F2`` evaluates every policy on the same
+seeds (1) in distribution — every factor at the value the env resets to by default, which is
+what a dataset recorded without ``--variation`` contains — (2) with each factor (or factor group)
+resampled from its whole space every episode, and (3) with all of them resampled together. It
+prints one table (success and 95% interval per setting and policy, and the drop versus in
+distribution), writes a heatmap PNG with the policies side by side, and a JSON with the protocol.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from rich.table import Table
+
+from .stats import SuccessSummary
+
+IN_DISTRIBUTION = "in distribution"
+ALL_FACTORS = "all factors"
+
+
+def sweep_settings(env: str, factors: str) -> list[tuple[str, list[str]]]:
+    """The ``(label, variation)`` settings of a sweep: in distribution, each factor, then all.
+
+    ``factors`` is ``"all"`` (every top-level factor group of the env) or comma-separated factor
+    or group names (checked, with "did you mean").
+    """
+    from ..errors import ConfigError, unknown_name
+    from .worlds import variation_space_of
+
+    space = variation_space_of(env)
+    if space is None or not space.names():
+        raise ConfigError(f"--fov-sweep requires an env with factors of variation, got {env!r}, which has none")
+    names = list(space.names())
+    groups = [g for g in getattr(space, "spaces", {}) if g not in names]
+    if factors.strip() == "all":
+        chosen = groups or names
+    else:
+        chosen = [f.strip() for f in factors.split(",") if f.strip()]
+        if not chosen:
+            raise ConfigError(f"--fov-sweep requires 'all' or comma-separated factor names, got {factors!r}")
+        for name in chosen:
+            if name not in names and not any(n.startswith(name + ".") for n in names):
+                raise unknown_name(f"factor of variation of {env}", name, ["all", *groups, *names])
+    return [(IN_DISTRIBUTION, []), *((name, [name]) for name in chosen), (ALL_FACTORS, ["all"])]
+
+
+def run_sweep(env: str, policies: Sequence[str], factors: str, *, evaluate: Any, **kwargs: Any) -> dict[str, Any]:
+    """Evaluate each policy in each setting of :func:`sweep_settings` on the same seeds.
+
+    ``evaluate(env, policy, variation=..., **kwargs)`` is one evaluation returning
+    ``(summary, title, record)`` (:func:`~stable_worldmodel.cli.evaluation.evaluate_cli`). The
+    returned report holds the settings, the policies and, per policy, a row per setting.
+    """
+    settings = sweep_settings(env, factors)
+    report: dict[str, Any] = {"env": env, "policies": list(policies), "settings": [s for s, _ in settings], "results": {}}
+    for policy in policies:
+        rows = []
+        for label, variation in settings:
+            summary, _, record = evaluate(env, policy, variation=variation, **kwargs)
+            rows.append({"setting": label, "variation": variation, "summary": summary, "record": record})
+        report["results"][policy] = rows
+    return report
+
+
+def sweep_table(report: dict[str, Any]) -> Table:
+    """Rows: settings; columns: policies; cells: success rate, 95% interval and drop."""
+    table = Table(title=f"{report['env']}: success when factors of variation shift (same seeds)")
+    table.add_column("setting", style="bold")
+    for policy in report["policies"]:
+        table.add_column(policy, justify="right")
+    base = {p: rows[0]["summary"].rate for p, rows in report["results"].items()}
+    for i, setting in enumerate(report["settings"]):
+        cells = []
+        for policy in report["policies"]:
+            s: SuccessSummary = report["results"][policy][i]["summary"]
+            low, high = s.interval
+            drop = "" if i == 0 else f" ({100 * (s.rate - base[policy]):+.0f})"
+            cells.append(f"{100 * s.rate:.0f}% [{100 * low:.0f}, {100 * high:.0f}]{drop}")
+        table.add_row(setting, *cells)
+    return table
+
+
+def sweep_json(report: dict[str, Any], protocol: dict[str, Any]) -> dict[str, Any]:
+    """The report as JSON: per policy and setting the success rate, its interval, the drop
+    versus in distribution and the episode outcomes, plus the shared protocol."""
+    out: dict[str, Any] = {"env": report["env"], "protocol": protocol, "settings": report["settings"], "results": {}}
+    for policy, rows in report["results"].items():
+        base = rows[0]["summary"].rate
+        out["results"][policy] = [
+            {
+                "setting": r["setting"], "variation": r["variation"],
+                "success_rate": round(100 * r["summary"].rate, 2),
+                "ci95": [round(100 * v, 2) for v in r["summary"].interval],
+                "drop": round(100 * (r["summary"].rate - base), 2),
+                "episode_successes": r["record"].get("episode_successes"),
+            }
+            for r in rows
+        ]
+    return out
+
+
+def sweep_heatmap(report: dict[str, Any], path: Path) -> Path:
+    """A settings x policies heatmap of success rates (annotated with rate and interval)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    policies, settings = report["policies"], report["settings"]
+    rates = np.array([[report["results"][p][i]["summary"].rate for p in policies] for i in range(len(settings))])
+    fig, ax = plt.subplots(figsize=(1.8 + 1.9 * len(policies), 0.9 + 0.45 * len(settings)))
+    im = ax.imshow(100 * rates, cmap="RdYlGn", vmin=0, vmax=100, aspect="auto")
+    ax.set_xticks(range(len(policies)), policies, rotation=20, ha="right")
+    ax.set_yticks(range(len(settings)), settings)
+    for i in range(len(settings)):
+        for j, policy in enumerate(policies):
+            low, high = report["results"][policy][i]["summary"].interval
+            ax.text(j, i, f"{100 * rates[i, j]:.0f}%\n[{100 * low:.0f}, {100 * high:.0f}]", ha="center", va="center", fontsize=7)
+    fig.colorbar(im, ax=ax, label="success rate (%)")
+    ax.set_title(f"{report['env']}: generalization across factors of variation", fontsize=9)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return path
