@@ -18,6 +18,7 @@ EXTRAS = {
     "transformers": "vit",
     "dm_control": "mujoco",
     "ogbench": "mujoco",
+    "ray": "ray",
 }
 #: env tag -> the modules its extra installs (``swm envs`` marks envs whose extra is missing)
 EXTRA_MODULES = {"mujoco": ("mujoco", "dm_control", "ogbench")}

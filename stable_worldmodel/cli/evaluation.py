@@ -57,9 +57,10 @@ def _from_dataset(world: Any, name: str, episodes: int, goal_offset: int, budget
 def evaluate_cli(
     env: str, policy: str, *, episodes: int, seed: int, variation: Sequence[str], num_envs: int, max_steps: int,
     image_size: int, plan: Any = None, device: str = "auto", from_dataset: str | None = None, goal_offset: int = 25,
-    budget: int = 50, video: Path | None = None, decoder: str | None = None,
+    budget: int = 50, video: Path | None = None, decoder: str | None = None, ray: bool = False, ray_address: str | None = None,
 ) -> tuple[SuccessSummary, str, dict[str, Any]]:
-    """Evaluate ``policy`` and return its summary, a table title and the JSON record."""
+    """Evaluate ``policy`` and return its summary, a table title and the JSON record (``ray``:
+    the episodes spread over Ray tasks, see :func:`stable_worldmodel.world.on_ray.evaluate_on_ray`)."""
     start = time.perf_counter()
     record: dict[str, Any] = {"env": env, "policy": policy, "episodes": episodes, "seed": seed, "num_envs": num_envs, "image_size": image_size}
     limit = budget if from_dataset else max_steps
@@ -67,6 +68,14 @@ def evaluate_cli(
     if history > 1:
         record["history_size"] = history
     steps = max(limit, budget) if from_dataset else max_steps
+    if ray or ray_address:
+        from ..world.on_ray import evaluate_on_ray
+
+        results = evaluate_on_ray(env, policy, episodes, seed, factors=variation, image_size=image_size, max_steps=max_steps,
+                                  plan=plan, device=device, address=ray_address, progress=False)
+        title = f"{env}: seeds {seed}..{seed + episodes - 1}, at most {max_steps} steps (on Ray)"
+        record.update(protocol="seeds", seeds=[seed, seed + episodes - 1], max_steps=max_steps, variation=list(variation), ray=ray_address or "local")
+        return _finish(policy, results, record, plan, start), title, record
     with make_world(env, num_envs=num_envs, image_size=image_size, max_steps=steps, seed=seed, history_size=history) as world:
         if from_dataset:
             pol = make_policy(policy, env, seed=seed, plan=plan, device=device)
@@ -90,6 +99,11 @@ def evaluate_cli(
                     record["decoder"] = used
             paths = world.record_video(video, max_steps=limit, seed=seed, options=reset_options(variation))
             record["videos"] = [str(p) for p in paths]
+    return _finish(policy, results, record, plan, start), title, record
+
+
+def _finish(policy: str, results: dict, record: dict[str, Any], plan: Any, start: float) -> SuccessSummary:
+    """The summary of ``results``; fills the outcome fields of ``record``."""
     summary = SuccessSummary.from_results(policy, results)
     record.update(
         success_rate=round(100 * summary.rate, 2), ci95=[round(100 * v, 2) for v in summary.interval],
@@ -100,7 +114,7 @@ def evaluate_cli(
         record["plan"] = plan.as_dict()
     if checkpoint_run(policy) is not None:
         record["model"] = _model_summary(policy)
-    return summary, title, record
+    return summary
 
 
 def _held_out(policy: str, dataset: str) -> list[int] | None:

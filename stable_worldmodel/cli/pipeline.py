@@ -24,6 +24,10 @@ VariationOpt = Annotated[
 ]
 
 
+RayOpt = Annotated[bool, typer.Option("--ray", help="Spread the episodes over Ray tasks (a private local Ray on this machine unless --ray-address).")]
+RayAddressOpt = Annotated[str | None, typer.Option("--ray-address", metavar="ADDRESS", help="Ray cluster to use (HOST:PORT or 'auto'); implies --ray.", show_default=False)]
+
+
 def default_dataset_name(env_id: str, policy: str) -> str:
     """``swm/TwoRoom-v2`` + ``expert`` -> ``tworoom-v1-expert``."""
     return f"{env_id.rsplit('/', 1)[-1].lower()}-{policy}"
@@ -41,10 +45,13 @@ def collect(
     max_steps: MaxStepsOpt = None,
     overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing dataset of that name instead of resuming it.")] = False,
     noise: Annotated[float | None, typer.Option("--noise", min=0.0, metavar="SIGMA", help="Std of the Gaussian noise on the expert's actions (default: 1.0 times the action bound for experts that take noise, so the data shows what varied actions do; 0 records clean demonstrations).", show_default=False)] = None,
+    ray: RayOpt = False,
+    ray_address: RayAddressOpt = None,
 ) -> None:
     """Record EPISODES episodes of ENV into an HDF5 dataset in the cache, then show it.
 
     Example: swm collect swm/TwoRoom-v2 --episodes 20 --policy expert --name tworoom
+    (--ray: one Ray task per shard of seeds, into NAME/shard_*.h5, read as one dataset)
     """
     from ..data import dataset_info, delete_dataset
     from ..data._index import not_a_file
@@ -60,6 +67,9 @@ def collect(
     what = not_a_file(path)
     require(what is None, f"swm collect requires {str(path)!r} to be a dataset file, got {what}; pick another --name")
     out = console()
+    if ray or ray_address:
+        _collect_on_ray(env, name, episodes, policy, noise, seed, image_size, max_steps, variation or [], overwrite, num_envs, ray_address)
+        return
     have = 0
     if path.exists():
         if overwrite:
@@ -75,6 +85,29 @@ def collect(
     display_dataset_info(dataset_info(name))
     how = f" (action noise {noise:g})" if noise else ""
     out.print(f"Recorded {max(episodes - have, 0)} {policy} episodes{how} of {env} to {path}", soft_wrap=True)
+
+
+def _collect_on_ray(env: str, name: str, episodes: int, policy: str, noise: float | None, seed: int, image_size: int,
+                    max_steps: int | None, variation: list[str], overwrite: bool, num_envs: int, address: str | None) -> None:
+    """``swm collect --ray``: a sharded dataset recorded by Ray tasks (:mod:`stable_worldmodel.world.on_ray`)."""
+    import sys
+
+    from ..data import dataset_info, delete_dataset, list_datasets
+    from ..world.on_ray import record_dataset_on_ray
+    from .display import console, display_dataset_info
+    from .worlds import check_factors, episode_limit, make_world, reset_options
+
+    if num_envs != 1:
+        raise typer.BadParameter("each Ray task runs one env: drop --num-envs (--ray spreads the episodes over tasks)", param_hint="--num-envs")
+    if overwrite and name in list_datasets():
+        delete_dataset(name)
+    with make_world(env, num_envs=1, image_size=16, max_steps=1, verbose=0) as world:  # checks the factor names
+        options = reset_options(check_factors(world, variation))
+    folder = record_dataset_on_ray(env, name, episodes, seed=seed, policy=policy, noise=noise, image_size=image_size,
+                                   max_steps=episode_limit(env, max_steps), options=options, address=address,
+                                   progress=sys.stderr.isatty())
+    display_dataset_info(dataset_info(name))
+    console().print(f"Recorded {episodes} {policy} episodes of {env} on Ray to {folder}/ (shards read as one dataset)", soft_wrap=True)
 
 
 def eval_cmd(
@@ -101,6 +134,8 @@ def eval_cmd(
     decoder: Annotated[str | None, typer.Option("--decoder", metavar="RUN", help="With --video and wm:RUN: the frame decoder that shows what the model predicts (default: RUN-frame when it exists).", show_default=False)] = None,
     fov_sweep: Annotated[str | None, typer.Option("--fov-sweep", metavar="FACTORS", help="Generalization report: evaluate in distribution, with each factor (all: every factor group; or F1,F2) resampled, and with all resampled, on the same seeds; a table, a heatmap PNG (beside --json, or --plot) and the JSON.", show_default=False)] = None,
     plot: Annotated[Path | None, typer.Option("--plot", metavar="FILE", help="With --fov-sweep: where the heatmap PNG goes (default: beside --json, else fov-sweep-ENV.png).", dir_okay=False, show_default=False)] = None,
+    ray: RayOpt = False,
+    ray_address: RayAddressOpt = None,
 ) -> None:
     """Evaluate a policy on ENV and print its success rate with a 95% confidence interval.
 
@@ -113,6 +148,8 @@ def eval_cmd(
     from .worlds import check_policy, episode_limit, resolve_env
 
     env = resolve_env(env)
+    if (ray or ray_address) and (video is not None or from_dataset is not None):
+        raise typer.BadParameter("evaluates seeded episodes: it cannot be combined with --video or --from-dataset", param_hint="--ray")
     if fov_sweep is not None:
         if video is not None or from_dataset is not None or variation:
             raise typer.BadParameter("cannot be combined with --video, --from-dataset or --variation (the sweep sets the factors)", param_hint="--fov-sweep")
@@ -134,12 +171,12 @@ def eval_cmd(
     out = console()
     if fov_sweep is not None:
         _fov_sweep(env, policies, fov_sweep, json_path, plot, episodes=episodes, seed=seed, num_envs=num_envs, max_steps=max_steps,
-                   image_size=image_size, plan=plan, device=device)
+                   image_size=image_size, plan=plan, device=device, ray=ray, ray_address=ray_address)
         return
     summary, title, record = evaluate_cli(
         env, policy, episodes=episodes, seed=seed, variation=variation or [], num_envs=num_envs, max_steps=max_steps,
         image_size=image_size, plan=plan, device=device, from_dataset=from_dataset, goal_offset=goal_offset, budget=budget,
-        video=video, decoder=decoder,
+        video=video, decoder=decoder, ray=ray, ray_address=ray_address,
     )
     out.print(success_table(title, [summary]))
     if record.get("videos"):

@@ -213,6 +213,10 @@ def show(
         names = known
     elif not names:
         raise ConfigError(f"swm show {kind} requires NAMES or --all, got neither (known: {', '.join(known) or 'none'})")
+    if kind == "dataset":  # one shard of a sharded dataset shows too
+        from ..data.info import list_dataset_shards
+
+        known = sorted({*known, *list_dataset_shards()})
     _check_names(kind, names, known)
     if kind == "model":
         for info in [info for name in names for info in model_infos(name)]:  # read all before printing

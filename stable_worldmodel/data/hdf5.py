@@ -138,8 +138,13 @@ def open_h5(path: str | os.PathLike):
 class HDF5Dataset(Dataset):
     """Samples of ``num_steps`` frames spaced by ``frameskip`` from ``<cache_dir>/<name>.h5``.
 
+    A *sharded* dataset (``<cache_dir>/<name>/shard_*.h5``, as ``swm collect --ray`` records)
+    reads as one: the shards' episodes one after the other, in shard-name order, with the
+    episode numbers (``ep_idx``, ``id``) counted across shards.
+
     Args:
-        name: dataset name in ``cache_dir`` (default :func:`get_cache_dir`) or a path to an ``.h5`` file.
+        name: dataset name in ``cache_dir`` (default :func:`get_cache_dir`), a path to an ``.h5``
+            file, or a folder of ``shard_*.h5`` files.
         path: the ``.h5`` file itself (0.1.1), instead of ``name``.
         frameskip: rows between two sampled frames; ``action`` groups the ``frameskip`` actions.
         num_steps: frames per sample (T).
@@ -173,15 +178,16 @@ class HDF5Dataset(Dataset):
         if (name is None) == (path is None):
             raise ConfigError(f"HDF5Dataset requires a dataset name or path=, got {'neither' if name is None else 'both'}")
         self.path = Path(path).expanduser() if path is not None else resolve_dataset_path(name, cache_dir)
-        check_file(self.path, "HDF5Dataset")
+        sharded = self.path.is_dir() and self.path.suffix != ".h5"  # a folder named x.h5 is a mistake, not shards
+        self._shards = shard_files(self.path, "HDF5Dataset") if sharded else [self.path]
+        if not sharded:
+            check_file(self.path, "HDF5Dataset")
         self.name = self.path.stem
         self._file = None
         self._pid = None
         self._blocks: dict[str, OrderedDict] = {}
-        f = self._handle()
         try:
-            self._lengths, self._offsets, self._columns = read_index(f, self.path)
-            self._describe_columns(f)
+            self._read_indexes()
         except (OSError, KeyError) as exc:  # h5py: damaged metadata (KeyError when an object cannot be opened)
             self.close()
             raise DatasetFormatError(f"HDF5Dataset could not read the episode index of {self.path} (damaged?): {exc}") from exc
@@ -205,6 +211,28 @@ class HDF5Dataset(Dataset):
             # hands out (N, H, W, C) views of them like every other reader
             self._cache[col] = np.ascontiguousarray(np.moveaxis(rows, -1, -3)) if col in self._images else rows
 
+    def _read_indexes(self) -> None:
+        """The episode index over every shard: offsets shifted by the rows of the shards before."""
+        lengths, offsets, self._bases, self._episode_bases = [], [], [], []
+        base = 0
+        for i, f in enumerate(self._handles()):
+            ls, os_, columns = read_index(f, self._shards[i])
+            if i == 0:
+                self._columns = columns
+                self._describe_columns(f)
+            elif sorted(columns) != sorted(self._columns) or any(tuple(f[k].shape[1:]) != self._shapes[k][0] for k in columns):
+                raise DatasetFormatError(
+                    f"HDF5Dataset requires every shard to have the columns and shapes of {self._shards[0].name}, "
+                    f"got {self._shards[i].name} with columns {sorted(columns)}"
+                )
+            self._bases.append(base)
+            self._episode_bases.append(sum(len(x) for x in lengths))
+            lengths.append(ls)
+            offsets.append(os_ + base)
+            base += int(os_[-1] + ls[-1]) if len(ls) else 0
+        self._bases.append(base)
+        self._lengths, self._offsets = np.concatenate(lengths), np.concatenate(offsets)
+
     def _describe_columns(self, f) -> None:
         self._shapes = {k: (tuple(f[k].shape[1:]), f[k].dtype) for k in self._columns}
         self._images = {k for k, (shape, dtype) in self._shapes.items() if is_image_column(shape, dtype)}
@@ -212,14 +240,19 @@ class HDF5Dataset(Dataset):
         self._max_blocks = {k: max(8, CACHE_BYTES // max(self._block_rows[k] * self._row_bytes(k), 1)) for k in self._columns}
 
     # -- file handle --------------------------------------------------------------------------
-    def _handle(self):
+    def _handles(self) -> list:
+        """One open file per shard (one for a plain dataset)."""
         pid = os.getpid()
         if self._file is None or self._pid != pid:  # first use in this process (e.g. a DataLoader worker)
             # a forked worker must not share the parent's HDF5 handle; the decoded blocks are
             # plain arrays and stay valid (copy-on-write), so a warm cache is kept
-            self._file = open_h5(self.path)
+            self._file = [open_h5(p) for p in self._shards]
             self._pid = pid
         return self._file
+
+    def _handle(self):
+        """The open file of a plain (one-file) dataset; the first shard of a sharded one."""
+        return self._handles()[0]
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
@@ -230,7 +263,8 @@ class HDF5Dataset(Dataset):
 
     def close(self) -> None:
         if self._file is not None:
-            self._file.close()
+            for f in self._file:
+                f.close()
             self._file = None
 
     @staticmethod
@@ -283,9 +317,18 @@ class HDF5Dataset(Dataset):
         return rows[start - b0 * size : stop - b0 * size]
 
     def _rows(self, col: str, start: int, stop: int) -> np.ndarray:
-        """Rows ``start:stop`` of ``col`` from the file; a damaged file raises :class:`DatasetFormatError`."""
+        """Rows ``start:stop`` of ``col`` from the file (the shards); a damaged file raises :class:`DatasetFormatError`."""
         try:
-            return self._handle()[col][start:stop]
+            files = self._handles()
+            if len(files) == 1:
+                return files[0][col][start:stop]
+            renumber = col in (keys.EP_IDX, keys.EPISODE_ID)  # episode numbers count across shards
+            parts = [f[col][max(start, lo) - lo:min(stop, hi) - lo] + (eb if renumber else 0)
+                     for f, lo, hi, eb in zip(files, self._bases[:-1], self._bases[1:], self._episode_bases)
+                     if max(start, lo) < min(stop, hi)]
+            if not parts:
+                return files[0][col][0:0]
+            return parts[0] if len(parts) == 1 else np.concatenate(parts)
         except OSError as exc:
             if any(t in str(exc).lower() for t in ("plugin", "not registered", "required filter")):  # an unknown compression filter
                 raise DatasetFormatError(
@@ -325,6 +368,17 @@ class HDF5Dataset(Dataset):
 
     def __repr__(self) -> str:
         return f"HDF5Dataset({str(self.path)!r}, " + super().__repr__().split("(", 1)[1]
+
+
+SHARD_PATTERN = "shard_*.h5"
+
+
+def shard_files(folder: Path, owner: str) -> list[Path]:
+    """The ``shard_*.h5`` files of a sharded dataset folder, in name order (FileNotFoundError when none)."""
+    shards = sorted(p for p in folder.glob(SHARD_PATTERN) if p.is_file())
+    if not shards:
+        raise FileNotFoundError(f"{owner} requires an .h5 file or a folder of {SHARD_PATTERN} files, got {str(folder)!r}, a folder without shards")
+    return shards
 
 
 def dataset_path(name: str | os.PathLike, cache_dir: str | os.PathLike | None = None) -> Path:

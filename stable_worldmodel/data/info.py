@@ -71,9 +71,22 @@ def _dataset_dirs(root: Path) -> list[Path]:
 def list_datasets() -> list[str]:
     """Names of the datasets in the cache: ``<name>.h5`` files and dataset folders of any registered format."""
     root = get_cache_dir()
-    names = {p.relative_to(root).with_suffix("").as_posix() for p in root.rglob("*.h5") if p.is_file() and not _hidden(p, root)}
-    names |= {p.relative_to(root).as_posix() for p in _dataset_dirs(root)}
-    return sorted(names)
+    dirs = {p.relative_to(root).as_posix() for p in _dataset_dirs(root)}
+    names = {p.relative_to(root).with_suffix("").as_posix() for p in root.rglob("*.h5")
+             if p.is_file() and not _hidden(p, root) and not _is_shard(p, dirs, root)}
+    return sorted(names | dirs)
+
+
+def list_dataset_shards() -> list[str]:
+    """Names of the shards of the sharded datasets in the cache (``<name>/shard_00000`` ...): each
+    can be shown or read on its own; :func:`list_datasets` lists their folder."""
+    root = get_cache_dir()
+    return sorted(p.relative_to(root).with_suffix("").as_posix() for d in _dataset_dirs(root) for p in d.glob("shard_*.h5") if p.is_file())
+
+
+def _is_shard(path: Path, dirs: set[str], root: Path) -> bool:
+    """A ``shard_*.h5`` of a sharded dataset folder (listed as the folder)."""
+    return path.name.startswith("shard_") and path.parent.relative_to(root).as_posix() in dirs
 
 
 def leftover_partials() -> list[Path]:

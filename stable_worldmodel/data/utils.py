@@ -73,14 +73,21 @@ def resolve_dataset_path(name: str | os.PathLike, cache_dir: str | os.PathLike |
 
     ``name`` is taken as a path when it ends with ``suffix`` or is an existing file; names
     with folders (``"pusht/shard_0"``) stay under the cache folder. A name found only in
-    the ``datasets`` sub-folder (where 0.1.1 keeps them) resolves there.
+    the ``datasets`` sub-folder (where 0.1.1 keeps them) resolves there. A sharded dataset (a
+    folder ``<name>/`` of ``shard_*<suffix>`` files and no ``<name><suffix>``) resolves to its folder.
     """
     path = Path(name).expanduser()
     if str(name).endswith(suffix) or path.is_file():
         return path
+    if path.is_dir() and any(path.glob(f"shard_*{suffix}")):
+        return path
     root = _root(cache_dir)
     found = root / f"{name}{suffix}"
     in_sub = root / DATASETS_SUBFOLDER / f"{name}{suffix}"
+    if not found.exists() and not in_sub.exists():
+        folder = root / str(name)
+        if folder.is_dir() and any(folder.glob(f"shard_*{suffix}")):
+            return folder
     return in_sub if not found.exists() and in_sub.exists() else found
 
 

@@ -1,4 +1,5 @@
-"""``hdf5``: one ``.h5`` file, one dataset per column (layout in :mod:`..writer`)."""
+"""``hdf5``: one ``.h5`` file, one dataset per column (layout in :mod:`..writer`), or a folder of
+``shard_*.h5`` files read as one dataset (what ``swm collect --ray`` records)."""
 
 from __future__ import annotations
 
@@ -23,7 +24,7 @@ class HDF5(Format):
     @classmethod
     def detect(cls, path: str | os.PathLike) -> bool:
         p = Path(path)
-        return p.suffix in SUFFIXES and p.is_file()
+        return (p.suffix in SUFFIXES and p.is_file()) or (p.is_dir() and any(p.glob("shard_*.h5")))
 
     @classmethod
     def open_reader(cls, path: str | os.PathLike, **kwargs: Any) -> Any:
