@@ -249,6 +249,47 @@ def _fov_sweep(env: str, policies: list[str], factors: str, json_path: Path | No
         out.print(f"Results: {json_path}", soft_wrap=True)
 
 
+def sweep(
+    file: Annotated[Path, typer.Argument(help="YAML: envs, policies, factors (none, a factor or group, all, or a list resampled together), episodes, seed, num_envs, max_steps, image_size, device, plan.", metavar="FILE", exists=True, dir_okay=False, show_default=False)],
+    json_path: Annotated[Path | None, typer.Option("--json", metavar="FILE", help="Write every result and the protocol as JSON.", dir_okay=False)] = None,
+    plot: Annotated[Path | None, typer.Option("--plot", metavar="DIR", help="Write one heatmap PNG per env into DIR (default: beside --json).", file_okay=False, show_default=False)] = None,
+    ray: RayOpt = False,
+    ray_address: RayAddressOpt = None,
+) -> None:
+    """Evaluate every policy on every env in every factor setting of a YAML file, on the same seeds:
+    one table per env, heatmaps and one JSON (--ray spreads the episodes over Ray).
+
+    Example: swm sweep sweep.yaml --ray --json results/sweep.json
+    """
+    import json
+
+    from ..planning.learned import PlanSettings
+    from .display import console
+    from .evaluation import evaluate_cli
+    from .sweep import load_sweep_file, run_sweep_file, sweep_heatmap, sweep_json, sweep_table
+    from .worlds import check_policy
+
+    spec = load_sweep_file(file)
+    spec["policies"] = [check_policy(p) for p in spec["policies"]]
+    plan = PlanSettings(**{"seed": spec["seed"], **spec["plan"]}) if any(p.startswith("wm:") for p in spec["policies"]) else None
+    if json_path is not None:
+        json_path = output_file(json_path, "swm sweep --json")
+    reports = run_sweep_file(spec, evaluate=evaluate_cli, plan=plan, ray=ray, ray_address=ray_address)
+    out = console()
+    where = plot or (json_path.parent if json_path is not None else None)
+    for report in reports:
+        out.print(sweep_table(report))
+        if where is not None:
+            png = sweep_heatmap(report, Path(where) / f"sweep-{report['env'].split('/')[-1]}.png")
+            out.print(f"Heatmap: {png}", soft_wrap=True)
+    if json_path is not None:
+        protocol = {k: v for k, v in spec.items() if k not in ("envs", "policies")}
+        protocol["ray"] = ray_address or ("local" if ray else None)
+        data = {"sweep": str(file), "protocol": protocol, "envs": [sweep_json(r, protocol) for r in reports]}
+        json_path.write_text(json.dumps(data, indent=2) + "\n")
+        out.print(f"Results: {json_path}", soft_wrap=True)
+
+
 def fovs(env: EnvArg) -> None:
     """Show the factors of variation of ENV: type, range, shape and default of each.
 

@@ -116,7 +116,7 @@ def common(
 
 def _register() -> None:
     from .demo import demo
-    from .pipeline import collect, envs, eval_cmd, fovs
+    from .pipeline import collect, envs, eval_cmd, fovs, sweep
     from .resources import checkpoints_cmd, datasets_cmd, delete, inspect_cmd, list_cmd, show
     from .train import train_cmd
 
@@ -125,6 +125,7 @@ def _register() -> None:
     app.command("delete")(delete)
     app.command("collect")(collect)
     app.command("eval")(eval_cmd)
+    app.command("sweep")(sweep)
     app.command("train")(train_cmd)
     app.command("envs")(envs)
     app.command("fovs")(fovs)

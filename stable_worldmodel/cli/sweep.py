@@ -28,24 +28,37 @@ def sweep_settings(env: str, factors: str) -> list[tuple[str, list[str]]]:
     ``factors`` is ``"all"`` (every top-level factor group of the env) or comma-separated factor
     or group names (checked, with "did you mean").
     """
-    from ..errors import ConfigError, unknown_name
+    from ..errors import ConfigError
     from .worlds import variation_space_of
 
     space = variation_space_of(env)
     if space is None or not space.names():
         raise ConfigError(f"--fov-sweep requires an env with factors of variation, got {env!r}, which has none")
-    names = list(space.names())
-    groups = [g for g in getattr(space, "spaces", {}) if g not in names]
+    names, groups = factor_names(space)
     if factors.strip() == "all":
         chosen = groups or names
     else:
         chosen = [f.strip() for f in factors.split(",") if f.strip()]
         if not chosen:
             raise ConfigError(f"--fov-sweep requires 'all' or comma-separated factor names, got {factors!r}")
-        for name in chosen:
-            if name not in names and not any(n.startswith(name + ".") for n in names):
-                raise unknown_name(f"factor of variation of {env}", name, ["all", *groups, *names])
+        check_factor_names(env, space, chosen)
     return [(IN_DISTRIBUTION, []), *((name, [name]) for name in chosen), (ALL_FACTORS, ["all"])]
+
+
+def factor_names(space: Any) -> tuple[list[str], list[str]]:
+    """The factor names of a variation space and its top-level group names (those that are not factors)."""
+    names = list(space.names()) if space is not None else []
+    return names, [g for g in getattr(space, "spaces", {}) if g not in names]
+
+
+def check_factor_names(env: str, space: Any, chosen: Sequence[str], extra: Sequence[str] = ()) -> None:
+    """Each of ``chosen`` is ``all``, a factor or a group of ``space``; else "did you mean"."""
+    from ..errors import unknown_name
+
+    names, groups = factor_names(space)
+    for name in chosen:
+        if name != "all" and name not in names and not any(n.startswith(name + ".") for n in names):
+            raise unknown_name(f"factor of variation of {env}", name, [*extra, "all", *groups, *names])
 
 
 def run_sweep(env: str, policies: Sequence[str], factors: str, *, evaluate: Any, **kwargs: Any) -> dict[str, Any]:
@@ -128,3 +141,78 @@ def sweep_heatmap(report: dict[str, Any], path: Path) -> Path:
     fig.savefig(path, dpi=120)
     plt.close(fig)
     return path
+
+
+# -- sweeps from a YAML file: envs x policies x factor settings ----------------------------------
+#: keys of a sweep file and their defaults (``envs`` and ``policies`` are required)
+SWEEP_KEYS = {
+    "envs": None, "policies": None, "factors": ["none"], "episodes": 20, "seed": 0, "num_envs": 1,
+    "max_steps": None, "image_size": 64, "device": "auto", "plan": {},
+}
+
+
+def load_sweep_file(path: Path) -> dict[str, Any]:
+    """The settings of sweep file ``path`` (YAML), checked, defaults filled in.
+
+    ``factors`` lists the settings evaluated for every env and policy: ``none`` (in distribution),
+    a factor or group name, ``all``, or a list of names resampled together.
+    """
+    import yaml
+
+    from ..errors import ConfigError, did_you_mean
+
+    try:
+        spec = yaml.safe_load(Path(path).read_text())
+    except (OSError, yaml.YAMLError) as exc:
+        raise ConfigError(f"swm sweep requires a readable YAML file, got {str(path)!r}: {exc}") from exc
+    if not isinstance(spec, dict):
+        raise ConfigError(f"swm sweep requires a YAML mapping with keys {', '.join(SWEEP_KEYS)}, got {type(spec).__name__}")
+    for key in spec:
+        if key not in SWEEP_KEYS:
+            raise ConfigError(f"swm sweep file has an unknown key {key!r}.{did_you_mean(key, SWEEP_KEYS)} Keys: {', '.join(SWEEP_KEYS)}")
+    out = {k: spec.get(k, v) for k, v in SWEEP_KEYS.items()}
+    for key in ("envs", "policies", "factors"):
+        value = out[key]
+        if isinstance(value, str):
+            out[key] = value = [value]
+        if not isinstance(value, list) or not value:
+            raise ConfigError(f"swm sweep requires {key!r} to be a non-empty list, got {value!r}")
+    for key in ("episodes", "seed", "num_envs", "image_size"):
+        if isinstance(out[key], bool) or not isinstance(out[key], int) or out[key] < (0 if key == "seed" else 1):
+            raise ConfigError(f"swm sweep requires {key!r} to be an integer >= {0 if key == 'seed' else 1}, got {out[key]!r}")
+    if not isinstance(out["plan"], dict):
+        raise ConfigError(f"swm sweep requires 'plan' to be a mapping of planner settings (solver, horizon, ...), got {out['plan']!r}")
+    return out
+
+
+def _setting(entry: Any) -> tuple[str, list[str]]:
+    """A ``factors`` entry as ``(label, variation)``."""
+    if entry in (None, "none", IN_DISTRIBUTION):
+        return IN_DISTRIBUTION, []
+    names = [entry] if isinstance(entry, str) else [str(e) for e in entry]
+    return ("all factors" if names == ["all"] else "+".join(names)), names
+
+
+def run_sweep_file(spec: dict[str, Any], *, evaluate: Any, plan: Any, **kwargs: Any) -> list[dict[str, Any]]:
+    """One report per env (as :func:`run_sweep`), every policy in every setting on the same seeds."""
+    from .worlds import episode_limit, resolve_env, variation_space_of
+
+    reports = []
+    for env in spec["envs"]:
+        env = resolve_env(env)
+        settings = [_setting(e) for e in spec["factors"]]
+        space = variation_space_of(env)
+        for _, variation in settings:
+            check_factor_names(env, space, variation, extra=["none"])
+        report: dict[str, Any] = {"env": env, "policies": list(spec["policies"]), "settings": [s for s, _ in settings], "results": {}}
+        for policy in spec["policies"]:
+            report["results"][policy] = []
+            for label, variation in settings:
+                summary, _, record = evaluate(
+                    env, policy, variation=variation, episodes=spec["episodes"], seed=spec["seed"], num_envs=spec["num_envs"],
+                    max_steps=episode_limit(env, spec["max_steps"]), image_size=spec["image_size"], device=spec["device"],
+                    plan=plan if policy.startswith("wm:") else None, **kwargs,
+                )
+                report["results"][policy].append({"setting": label, "variation": variation, "summary": summary, "record": record})
+        reports.append(report)
+    return reports

@@ -143,3 +143,34 @@ def test_swm_collect_and_eval_with_ray(local_ray, swm, _stablewm_home, error_lin
     assert record["ray"] == "local" and record["success_rate"] == 100.0 and len(record["episode_successes"]) == 4
     bad = swm("collect", TOY, "-n", "3", "--ray", "--num-envs", "2")
     assert bad.exit_code != 0 and "each Ray task runs one env" in error_line(bad)
+
+
+SWEEP = """envs: [swm/Toy-v0]
+policies: [expert]
+factors: [none, agent.speed, [agent, goal], all]
+episodes: 5
+num_envs: 2
+max_steps: 20
+image_size: 16
+"""
+
+
+def test_swm_sweep_file_on_ray_equals_the_single_process_sweep(local_ray, swm, tmp_path, error_line):
+    (tmp_path / "s.yaml").write_text(SWEEP)
+    results = {}
+    for how in ((), ("--ray",)):
+        out = tmp_path / ("ray" if how else "one") / "s.json"
+        result = swm("sweep", str(tmp_path / "s.yaml"), "--json", str(out), *how)
+        assert result.exit_code == 0, result.output
+        data = json.loads(out.read_text())
+        (env,) = data["envs"]
+        assert env["settings"] == ["in distribution", "agent.speed", "agent+goal", "all factors"]
+        results[how] = [(r["setting"], r["episode_successes"]) for r in env["results"]["expert"]]
+        assert (out.parent / "sweep-Toy-v0.png").is_file()
+    assert results[()] == results[("--ray",)] and data["protocol"]["ray"] == "local"
+    (tmp_path / "bad.yaml").write_text("envs: [swm/Toy-v0]\npolicys: [expert]\n")
+    bad = swm("sweep", str(tmp_path / "bad.yaml"))
+    assert bad.exit_code != 0 and "unknown key 'policys'. Did you mean 'policies'" in error_line(bad)
+    (tmp_path / "bad2.yaml").write_text("envs: [swm/Toy-v0]\npolicies: [expert]\nfactors: [agnt]\n")
+    bad = swm("sweep", str(tmp_path / "bad2.yaml"))
+    assert bad.exit_code != 0 and "Did you mean" in error_line(bad) and "'agent'" in error_line(bad)
