@@ -174,12 +174,14 @@ def reset_options(factors: Sequence[str]) -> dict | None:
 
 
 def episode_limit(env_id: str, max_steps: int | None = None) -> int:
-    """``max_steps`` when given, else the env's registered episode limit, else :data:`DEFAULT_MAX_STEPS`."""
+    """``max_steps`` when given, else the env's registered episode limit, else the tools' limit
+    registered for it (``EnvEntry.tool_steps``), else :data:`DEFAULT_MAX_STEPS`."""
     from ..envs import get_entry
 
     if max_steps is not None:
         return int(max_steps)
-    return int(get_entry(env_id).max_episode_steps or DEFAULT_MAX_STEPS)
+    entry = get_entry(env_id)
+    return int(entry.max_episode_steps or entry.tool_steps or DEFAULT_MAX_STEPS)
 
 
 def make_world(

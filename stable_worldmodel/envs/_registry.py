@@ -23,7 +23,8 @@ class EnvEntry:
     tags: tuple[str, ...] = ()
     expert: str | None = None  # "module:Class" of a batched expert policy
     kwargs: dict[str, Any] = field(default_factory=dict)
-    max_episode_steps: int | None = None
+    max_episode_steps: int | None = None  # Gymnasium's TimeLimit (None: the env sets its own end, as upstream)
+    tool_steps: int | None = None  # the swm tools' default episode limit where max_episode_steps is None
 
 
 _ENTRIES: dict[str, EnvEntry] = {}
@@ -32,6 +33,8 @@ WORLDS: set[str] = set()  # 0.0.3's name: every id registered through us (kept i
 _P = "stable_worldmodel.envs"
 #: ids whose older version is a supported design of its own (upstream's), not an outdated one
 SIDE_BY_SIDE = r"swm/(PushT(-Discrete)?-v1|TwoRoom-v[01]|SimplePointMaze-v0)"
+#: DMControl domains with a scripted expert (:mod:`stable_worldmodel.envs.dmcontrol.expert`)
+DMC_EXPERTS = ("cartpole", "pendulum", "reacher")
 BUILTIN: tuple[EnvEntry, ...] = (
     EnvEntry("swm/Toy-v0", f"{_P}.toy.env:ToyEnv", ("toy", "continuous"), f"{_P}.toy.env:ToyExpert", max_episode_steps=100),
     EnvEntry("swm/PushT-v1", f"{_P}.pusht.v1:PushTV1", ("paper", "continuous", "pymunk"), f"{_P}.pusht.v1_expert:PushTV1Expert", max_episode_steps=300),
@@ -75,6 +78,17 @@ BUILTIN: tuple[EnvEntry, ...] = (
         max_episode_steps=100,
     ),
     EnvEntry("swm/VoidRun-v0", f"{_P}.voidrun.env:VoidRunEnv", ("discrete",), f"{_P}.voidrun.expert:VoidRunExpert", max_episode_steps=100),
+    # MuJoCo (extra "mujoco"): no TimeLimit of their own, as upstream; the tools cut at OGBench's /
+    # dm_control's episode lengths
+    *(
+        EnvEntry(f"swm/{name}DMControl-v0", f"{_P}.dmcontrol.{module}:{name}DMControlWrapper", ("continuous", "mujoco", "dmcontrol"),
+                 f"{_P}.dmcontrol.expert:DMControlExpert" if module in DMC_EXPERTS else None, tool_steps=1000)
+        for name, module in (
+            ("Humanoid", "humanoid"), ("Cheetah", "cheetah"), ("Hopper", "hopper"), ("Reacher", "reacher"),
+            ("Walker", "walker"), ("Acrobot", "acrobot"), ("Pendulum", "pendulum"), ("Cartpole", "cartpole"),
+            ("BallInCup", "ball_in_cup"), ("Finger", "finger"), ("Manipulator", "manipulator"), ("Quadruped", "quadruped"),
+        )
+    ),
 )
 
 
@@ -86,11 +100,12 @@ def register_env(
     expert: str | None = None,
     kwargs: dict[str, Any] | None = None,
     max_episode_steps: int | None = None,
+    tool_steps: int | None = None,
 ) -> None:
     """Register ``env_id`` with Gymnasium and with our registry (idempotent)."""
     import gymnasium as gym
 
-    entry = EnvEntry(env_id, entry_point, tuple(tags), expert, dict(kwargs or {}), max_episode_steps)
+    entry = EnvEntry(env_id, entry_point, tuple(tags), expert, dict(kwargs or {}), max_episode_steps, tool_steps)
     _ENTRIES[env_id] = entry
     WORLDS.add(env_id)
     if env_id not in gym.registry:
@@ -106,6 +121,7 @@ def register_all() -> None:
             expert=entry.expert,
             kwargs=entry.kwargs,
             max_episode_steps=entry.max_episode_steps,
+            tool_steps=entry.tool_steps,
         )
     # swm/PushT-v1 (upstream 0.1.1's behaviour) and swm/PushT-v2 (our design), TwoRoom-v0 (0.0.3's)
     # and v1 (upstream 0.1.1's) and v2 (ours), SimplePointMaze-v0 (0.1.1's) and v1 (ours) are supported side by side: silence

@@ -178,6 +178,18 @@ def test_envs_lists_every_env_with_factor_count(swm):
     assert "toy" in row
 
 
+def test_envs_marks_envs_whose_extra_is_missing(swm, monkeypatch):
+    from stable_worldmodel import _optional
+
+    available = _optional.is_available
+    monkeypatch.setattr(_optional, "is_available", lambda m: m != "ogbench" and available(m))
+    assert _optional.missing_extra(("continuous", "mujoco")) == "mujoco" and _optional.missing_extra(("toy",)) is None
+    result = swm("envs", "--tag", "mujoco")
+    assert result.exit_code == 0
+    row = next(line for line in result.stdout.splitlines() if "swm/CartpoleDMControl-v0" in line)
+    assert "n/a: pip install" in row  # the env is not even built: nothing to import
+
+
 def test_envs_tag_filter(swm, error_line):
     result = swm("envs", "--tag", "toy")
     assert result.exit_code == 0
