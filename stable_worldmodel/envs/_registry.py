@@ -147,8 +147,10 @@ def get_entry(env_id: str) -> EnvEntry:
         return EnvEntry(env_id, ep, (), None, dict(spec.kwargs), spec.max_episode_steps)
     ours = sorted(_ENTRIES)
     hint = did_you_mean(env_id, ours) or did_you_mean(env_id, [k for k in gym.registry if k not in _ENTRIES])
+    dmc = [e for e in ours if "dmcontrol" in _ENTRIES[e].tags]
+    shown = [e for e in ours if e not in dmc] + ([f"swm/<Name>DMControl-v0 ({len(dmc)} domains, see `swm envs`)"] if dmc else [])
     raise UnknownNameError(
-        f"Unknown environment id {env_id!r}.{hint} Our worlds: {', '.join(ours)} (any registered Gymnasium id works too)"
+        f"Unknown environment id {env_id!r}.{hint} Our worlds: {', '.join(shown)} (any registered Gymnasium id works too)"
     )
 
 
