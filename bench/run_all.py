@@ -19,6 +19,7 @@ SCRIPTS = [
     ("bench_expert_success.py", []),
     ("bench_wm.py", []),  # ours vs upstream 0.1.1 when ../peer011-venv exists
     ("bench_ray.py", []),
+    ("bench_mujoco.py", []),  # ours vs upstream 0.1.1 when ../peer011-venv exists
 ]
 
 
