@@ -80,6 +80,8 @@ BUILTIN: tuple[EnvEntry, ...] = (
     EnvEntry("swm/VoidRun-v0", f"{_P}.voidrun.env:VoidRunEnv", ("discrete",), f"{_P}.voidrun.expert:VoidRunExpert", max_episode_steps=100),
     # MuJoCo (extra "mujoco"): no TimeLimit of their own, as upstream; the tools cut at OGBench's /
     # dm_control's episode lengths
+    EnvEntry("swm/OGBCube-v0", f"{_P}.ogbench.cube_env:CubeEnv", ("paper", "continuous", "mujoco"), f"{_P}.ogbench.expert:OGBenchExpert", tool_steps=200),
+    EnvEntry("swm/OGBScene-v0", f"{_P}.ogbench.scene_env:SceneEnv", ("continuous", "mujoco"), f"{_P}.ogbench.expert:OGBenchExpert", tool_steps=750),
     *(
         EnvEntry(f"swm/{name}DMControl-v0", f"{_P}.dmcontrol.{module}:{name}DMControlWrapper", ("continuous", "mujoco", "dmcontrol"),
                  f"{_P}.dmcontrol.expert:DMControlExpert" if module in DMC_EXPERTS else None, tool_steps=1000)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import os
 from collections.abc import Callable, Sequence
 from functools import partial
 from pathlib import Path
@@ -80,7 +81,8 @@ class World:
     an env is reset only by :meth:`reset` / :meth:`reset_envs` (the loops below do it).
 
     Extra keyword arguments go to the env constructor, except ``vectorization_mode``:
-    ``"auto"`` (default: worker processes when there are enough envs and cores), ``"sync"``
+    ``"auto"`` (default: worker processes when there are enough envs and cores, and from 2 envs
+    on for the render-bound MuJoCo envs, whose GL contexts are then made in the workers), ``"sync"``
     (all envs in this process) or ``"async"``; both give identical results for the same seeds.
     ``frame_skip`` spaces the stacked history frames; each :meth:`step` is one env step.
     ``goal_shape`` (seed 000's argument) draws ``goal`` images at another (H, W).
@@ -143,6 +145,8 @@ class World:
             pre_wrappers,
             add_pixels,
         )
+        if mode == "auto" and render_bound(env_name) and n >= 2 and (os.cpu_count() or 1) >= 2:
+            mode = "async"  # rendering dominates a step (~50 ms): worker processes pay from 2 envs on
         self._vec = VecEnv(factory, n, mode=mode)
         self.envs = self._vec
         self._rng = np.random.default_rng(seed)
@@ -357,6 +361,14 @@ class World:
         return evaluate_from_dataset(
             self, dataset, episodes_idx, start_steps, goal_offset_steps, eval_budget, callables=callables, save_video=save_video, video_path=video_path
         )
+
+
+def render_bound(env_name: str) -> bool:
+    """True for envs whose step is dominated by rendering (the MuJoCo envs: tag ``mujoco``)."""
+    from ..envs._registry import _ENTRIES
+
+    entry = _ENTRIES.get(env_name)
+    return entry is not None and "mujoco" in entry.tags
 
 
 def _set_array_rows(current, ids, value, n):

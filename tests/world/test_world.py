@@ -371,3 +371,10 @@ def test_goal_less_env_works_with_the_default_goal_conditioned():
     world.reset(seed=0)
     world.step()
     assert keys.GOAL not in world.infos and world.infos[keys.PIXELS].shape == (1, 1, 8, 8, 3)
+
+
+def test_render_bound_envs_are_the_mujoco_ones():
+    from stable_worldmodel.world.world import render_bound
+
+    assert render_bound("swm/OGBCube-v0") and render_bound("swm/CartpoleDMControl-v0")
+    assert not render_bound(TOY) and not render_bound("swm/PushT-v1") and not render_bound("no/such-env")
