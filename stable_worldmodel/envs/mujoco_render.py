@@ -36,12 +36,31 @@ from ..errors import ConfigError, did_you_mean
 RENDER_QUALITIES = ("low", "medium", "high")
 
 
+def default_gl_backend() -> str | None:
+    """``MUJOCO_GL`` after choosing EGL where MuJoCo could not render otherwise (no mujoco import).
+
+    On Linux without ``DISPLAY`` / ``WAYLAND_DISPLAY``, an unset ``MUJOCO_GL`` becomes ``"egl"``
+    while ``mujoco`` is not imported yet. ``import stable_worldmodel`` calls it, so importing
+    ``mujoco`` (or dm_control) after our package renders headless too.
+    """
+    backend = os.environ.get("MUJOCO_GL")
+    if backend is None and _headless_linux() and "mujoco" not in sys.modules:
+        backend = os.environ["MUJOCO_GL"] = "egl"
+    return backend
+
+
+def _headless_linux() -> bool:
+    return sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
 def setup_gl() -> str | None:
     """Choose the GL backend before ``mujoco`` is imported; returns ``MUJOCO_GL``.
 
-    On Linux without ``DISPLAY`` / ``WAYLAND_DISPLAY``, an unset ``MUJOCO_GL`` becomes ``"egl"``.
-    For ``egl`` / ``osmesa``, an unset ``PYOPENGL_PLATFORM`` is set to match (dm_control and
-    PyOpenGL read it); a different value raises, since frames would come from the wrong library.
+    On Linux without ``DISPLAY`` / ``WAYLAND_DISPLAY``, an unset ``MUJOCO_GL`` becomes ``"egl"``
+    (:func:`default_gl_backend`). For ``egl`` / ``osmesa``, an unset ``PYOPENGL_PLATFORM`` is set
+    to match (dm_control and PyOpenGL read it); a different value raises, since frames would come
+    from the wrong library. When ``mujoco`` was imported headless before ``MUJOCO_GL`` was set, it
+    has picked GLFW, which cannot render without a display: ConfigError saying how to fix it.
     Raises :class:`~stable_worldmodel.errors.DependencyNotInstalled` (with the pip command) when
     the ``mujoco`` extra (mujoco, dm_control, ogbench) is not installed.
     """
@@ -54,10 +73,12 @@ def setup_gl() -> str | None:
             f"the MuJoCo environments require {', '.join(missing)}, which is not installed. "
             f'Install it with: pip install "stable-worldmodel[mujoco]"'
         )
-    backend = os.environ.get("MUJOCO_GL")
-    headless = not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
-    if backend is None and sys.platform.startswith("linux") and headless and "mujoco" not in sys.modules:
-        backend = os.environ["MUJOCO_GL"] = "egl"
+    backend = default_gl_backend()
+    if backend is None and _headless_linux():
+        raise ConfigError(
+            "mujoco was imported before MUJOCO_GL was set, so it picked GLFW, which cannot render without a "
+            "display; set MUJOCO_GL=egl in the environment, or import stable_worldmodel before mujoco"
+        )
     if backend in ("egl", "osmesa"):
         platform = os.environ.setdefault("PYOPENGL_PLATFORM", backend)
         if platform != backend:

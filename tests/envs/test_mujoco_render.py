@@ -42,6 +42,31 @@ def test_setup_gl_picks_egl_headless_and_refuses_a_mismatched_platform():
     assert out.stdout.split() == ["egl", "egl"]
 
 
+_HEADLESS = (
+    "import os; [os.environ.pop(k, None) for k in ('DISPLAY', 'WAYLAND_DISPLAY', 'MUJOCO_GL', 'PYOPENGL_PLATFORM')];"
+)
+
+
+def test_mujoco_imported_after_the_package_renders_headless():
+    code = _HEADLESS + (
+        "import stable_worldmodel; import mujoco; from stable_worldmodel.envs.mujoco_render import MjRenderer, setup_gl;"
+        f"setup_gl(); m = mujoco.MjModel.from_xml_string({XML!r}); d = mujoco.MjData(m); mujoco.mj_forward(m, d);"
+        "r = MjRenderer(m, 16, 16); print(os.environ['MUJOCO_GL'], r.render(d, 'c').std() > 0); r.close()"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert out.stdout.split() == ["egl", "True"], out.stderr[-2000:]
+
+
+def test_mujoco_imported_first_without_mujoco_gl_gets_a_typed_error():
+    code = _HEADLESS + (
+        "import mujoco; from stable_worldmodel.envs.mujoco_render import setup_gl\n"
+        "try:\n    setup_gl()\nexcept Exception as e:\n    print(type(e).__name__, e)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert out.stdout.startswith("ConfigError mujoco was imported before MUJOCO_GL was set"), out.stderr[-2000:]
+    assert "MUJOCO_GL=egl" in out.stdout
+
+
 def test_setup_gl_errors(monkeypatch):
     monkeypatch.setenv("MUJOCO_GL", "egl")
     monkeypatch.setenv("PYOPENGL_PLATFORM", "osmesa")
