@@ -1,8 +1,10 @@
 """Draw every registered environment: its default look and a few sampled variations.
 
 Usage: python docs/make_gallery.py [--out docs/images] [--size 160] [--variations 3]
+                                   [--envs ID ...] [--tag TAG] [--skip-tag TAG] [--gallery gallery.png]
 Writes one PNG per env (default look first, then ``variation: ["all"]`` samples) and
-``gallery.png`` with all of them, one row per env.
+``--gallery`` with all of them, one row per env. The README's pictures:
+``--skip-tag mujoco`` (gallery.png) and ``--tag mujoco --size 128 --gallery gallery_mujoco.png``.
 """
 
 from __future__ import annotations
@@ -35,21 +37,26 @@ def main() -> None:
     parser.add_argument("--out", default="docs/images")
     parser.add_argument("--size", type=int, default=160)
     parser.add_argument("--variations", type=int, default=3)
+    parser.add_argument("--envs", nargs="+", default=None, help="env ids (default: every registered env but Toy)")
+    parser.add_argument("--tag", default=None, help="only envs with this tag")
+    parser.add_argument("--skip-tag", default=None, help="leave out envs with this tag")
+    parser.add_argument("--gallery", default="gallery.png", help="file name of the picture of all rows")
     args = parser.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     rows = []
-    for env_id in swm.envs.list_envs():
-        if env_id == "swm/Toy-v0":
-            continue
+    env_ids = args.envs or [e for e in swm.envs.list_envs(tag=args.tag) if e != "swm/Toy-v0"]
+    if args.skip_tag:
+        env_ids = [e for e in env_ids if e not in set(swm.envs.list_envs(tag=args.skip_tag))]
+    for env_id in env_ids:
         row = env_row(env_id, args.size, args.variations)
         name = env_id.split("/")[-1]
         Image.fromarray(row).save(out / f"{name}.png")
         label = Image.new("RGB", (row.shape[1], 22), "white")
         ImageDraw.Draw(label).text((4, 4), f"{env_id}: default, then 'variation': ['all'] with seeds 1..{args.variations}", fill="black")
         rows.append(np.concatenate([np.asarray(label), row]))
-    Image.fromarray(np.concatenate(rows, axis=0)).save(out / "gallery.png")
-    print(f"wrote {len(rows)} env pictures and gallery.png to {out}")
+    Image.fromarray(np.concatenate(rows, axis=0)).save(out / args.gallery)
+    print(f"wrote {len(rows)} env pictures and {args.gallery} to {out}")
 
 
 if __name__ == "__main__":
