@@ -80,6 +80,10 @@ class WorldModelPolicy(BasePolicy):
         #: each plan (see :class:`stable_worldmodel.wm.frame.PredictionPanel`); its frames are
         #: kept in ``predicted_frames`` and shown by ``World.record_video``
         self.prediction_panel: Callable[[dict, torch.Tensor], np.ndarray] | None = None
+        #: optional ``info -> info`` called on the prepared infos (torch) before each solve: it may
+        #: add the model's cached embeddings (e.g. a waypoint as ``goal_emb``, see
+        #: :mod:`stable_worldmodel.planning.subgoals`) to redirect the plan
+        self.info_hook: Callable[[dict], dict] | None = None
         self.predicted_frames: np.ndarray | None = None
         self._space: gym.Space | None = None  # the batched action space planned for
         self._single = False  # the env has no num_envs: actions are returned without the batch axis
@@ -161,6 +165,8 @@ class WorldModelPolicy(BasePolicy):
 
     def _replan(self, info_dict: Mapping[str, Any]) -> None:
         info = prepare_info(info_dict, self.process, self.transform)
+        if self.info_hook is not None:
+            info = self.info_hook(info)
         try:
             result = self.solver.solve(info, init_action=self._next_init)
         except KeyError as exc:

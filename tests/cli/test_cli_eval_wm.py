@@ -146,8 +146,9 @@ def test_eval_unknown_run_is_one_line_naming_where_checkpoints_are(swm, home, er
         (("--solver", "cme"), ["'cme'", "Did you mean", "'cem'"]),
         (("--horizon", "3", "--receding-horizon", "4"), ["receding_horizon", "horizon=3", "got 4"]),
         (("--cost", "mni"), ["goal cost 'mni'", "Did you mean 'min'", "final"]),
+        (("--subgoals", "grpah"), ["subgoal method 'grpah'", "'graph'"]),
     ],
-    ids=["solver", "receding-horizon", "cost"],
+    ids=["solver", "receding-horizon", "cost", "subgoals"],
 )
 def test_eval_bad_plan_settings_are_one_line(swm, home, error_line, options, needles):
     result = swm("eval", TOY, "--policy", f"wm:{RUN}", "--episodes", "1", *options)
@@ -159,13 +160,27 @@ def test_eval_bad_plan_settings_are_one_line(swm, home, error_line, options, nee
         assert line.index("'cem'") < line.index("'icem'")
 
 
-def test_eval_final_cost_and_whole_plan_are_recorded(swm, home, tmp_path):
+@pytest.mark.parametrize(
+    "options, recorded",
+    [
+        (("--cost", "final", "--receding-horizon", "3"), {"cost": "final", "receding_horizon": 3}),
+        (("--subgoals", "graph", "--lookahead", "2"), {"subgoals": "graph", "lookahead": 2}),
+    ],
+    ids=["final-cost", "subgoals"],
+)
+def test_eval_plan_settings_are_recorded(swm, home, tmp_path, options, recorded):
     out = tmp_path / "out.json"
     args = ("eval", TOY, "--policy", f"wm:{RUN}", "--episodes", "2", "--num-envs", "2", "--max-steps", "6", *PLAN, *SMALL)
-    result = swm(*args, "--cost", "final", "--receding-horizon", "3", "--json", str(out))
+    result = swm(*args, *options, "--json", str(out))
     assert result.exit_code == 0, result.output
     plan = json.loads(out.read_text())["plan"]
-    assert (plan["cost"], plan["receding_horizon"]) == ("final", 3)
+    assert {k: plan[k] for k in recorded} == recorded
+
+
+def test_subgoals_need_a_wm_policy(swm, error_line):
+    result = swm("eval", TOY, "--policy", "random", "--episodes", "1", "--subgoals", "graph")
+    assert result.exit_code != 0
+    assert "wm:RUN policies only" in result.output
 
 
 # -- dataset_starts: the (episode, start) pairs of --from-dataset --------------------------------

@@ -276,3 +276,31 @@ def test_typed_errors(cube):
         cube.reset(seed=0, options={keys.VARIATION_VALUES: {"cube.size": [0.5]}})
     with pytest.raises(ConfigError, match="noise"):
         OGBenchExpert(noise=-1.0)
+
+
+def test_an_expert_cube_dataset_trains_lewm(tmp_path, monkeypatch):
+    """What `swm collect swm/OGBCube-v0 --policy expert` then `swm train lewm` do, tiny: the loss falls."""
+    import torch
+
+    from stable_worldmodel import World
+    from stable_worldmodel.data import HDF5Dataset
+    from stable_worldmodel.envs import expert_policy
+    from stable_worldmodel.train import train
+
+    monkeypatch.setenv("STABLEWM_HOME", str(tmp_path))
+    with World("swm/OGBCube-v0", 2, SIZE, max_episode_steps=12, verbose=0, vectorization_mode="sync") as world:
+        world.set_policy(expert_policy("swm/OGBCube-v0", noise=0.1, seed=0))
+        world.record_dataset("cube", episodes=4, seed=0, cache_dir=tmp_path)
+    data = HDF5Dataset("cube", cache_dir=tmp_path)
+    assert data.num_episodes == 4 and {keys.PIXELS, keys.ACTION, keys.PROPRIO}.issubset(data.column_names)
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        result = train("lewm", "cube", "tiny", steps=40, frameskip=1, device="cpu", seed=0, progress=False, cache_dir=str(tmp_path),
+                       log_every=5, image_size=16, embed_dim=16, cnn_width=8, depth=1, heads=2, dim_head=8, mlp_dim=32,
+                       projector_hidden=32, sigreg_num_proj=64, batch_size=8, warmup_steps=5)
+    finally:
+        torch.set_num_threads(threads)
+    losses = [r["train/loss"] for r in result.history if "train/loss" in r]
+    assert result.steps == 40 and np.isfinite(losses).all()
+    assert np.mean(losses[-2:]) < 0.8 * np.mean(losses[:2]), losses

@@ -231,3 +231,53 @@ def test_plan_settings_cost_is_checked_and_reaches_the_model(home):
     for cost in ("final", "min"):
         policy, protocol = make(home, solver="cem", horizon=2, samples=8, iterations=1, cost=cost)
         assert policy.solver.model.goal_cost == cost and protocol["plan"]["cost"] == cost
+
+
+def _planned_actions(policy, steps: int = 4) -> np.ndarray:
+    with toy_world() as world:
+        world.set_policy(policy)
+        world.reset(seed=EVAL_SEED, options=HIDDEN_GOAL)
+        for _ in range(steps):
+            world.step()
+        return world.infos[keys.ACTION].copy()
+
+
+def test_subgoal_graph_is_built_from_the_training_split_and_redirects_the_goal(home, monkeypatch):
+    """``subgoals="graph"``: one node per training frame (frameskip 1), the waypoint replaces the
+    goal embedding; with a lookahead longer than any path, the waypoint is the goal: same plans."""
+    settings = dict(solver="cem", horizon=2, receding_horizon=1, samples=16, iterations=2)
+    policy, protocol = make(home, **settings, subgoals="graph", lookahead=1)
+    graph = protocol["plan"]["graph"]
+    assert protocol["plan"]["subgoals"] == "graph" and protocol["plan"]["lookahead"] == 1
+    train_frames = sum(int(n) for n in np.asarray(_dataset_lengths(home))[protocol["train_episodes"]])
+    assert graph["stride"] == 1 and graph["nodes"] == train_frames and graph["edges"] > graph["nodes"] / 2
+    seen = []
+    solve = policy.solver.solve
+    monkeypatch.setattr(policy.solver, "solve", lambda info, init_action=None: seen.append(info["goal_emb"].clone()) or solve(info, init_action))
+    redirected = _planned_actions(policy)
+    model = policy.solver.model
+    with toy_world() as world:
+        world.reset(seed=EVAL_SEED, options=HIDDEN_GOAL)
+        goal = model.encode_pixels(policy.transform[keys.GOAL](torch.as_tensor(world.infos[keys.GOAL][:, -1]).permute(0, 3, 1, 2)))
+    assert seen[0].shape == (2, 1, goal.shape[-1]) and not torch.allclose(seen[0][:, 0], goal)  # a waypoint, not the goal
+    far, _ = make(home, **settings, subgoals="graph", lookahead=10_000)
+    plain, _ = make(home, **settings)
+    np.testing.assert_array_equal(_planned_actions(far), _planned_actions(plain))
+    assert not np.array_equal(redirected, _planned_actions(plain))
+
+
+def _dataset_lengths(home):
+    from stable_worldmodel.data import HDF5Dataset
+
+    return HDF5Dataset("toy", cache_dir=home).lengths
+
+
+def test_subgoal_graph_needs_the_training_dataset(home, monkeypatch):
+    import shutil
+
+    copy = home / "moved"
+    copy.mkdir(exist_ok=True)
+    shutil.copytree(home / "checkpoints", copy / "checkpoints", dirs_exist_ok=True)
+    monkeypatch.setattr("stable_worldmodel.planning.learned._exists", lambda path: False)
+    with pytest.raises(ConfigError, match="training dataset 'toy'"):
+        world_model_policy("lewm", PlanSettings(subgoals="graph"), device="cpu", cache_dir=str(copy))
