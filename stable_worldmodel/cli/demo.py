@@ -3,7 +3,7 @@
 1. record expert episodes into a dataset (in the cache) and show it;
 2. train a world model on it (tiny LeWM by default: a few minutes on a laptop CPU);
 3. evaluate the random policy, the expert and the learned model planning with CEM on the
-   same seeds;
+   same seeds (a JEPA model also with ``--subgoals graph``: waypoints from its training data);
 4. write one MP4 rollout of each policy, a PNG bar plot of the success rates with 95%
    Wilson intervals and a ``results.json``;
 5. end with one line naming where the outputs are.
@@ -28,6 +28,8 @@ from .stats import SuccessSummary
 DEFAULT_ENV = "swm/TwoRoom-v2"
 DEFAULT_OUT = Path("demo_outputs")
 POLICY_ORDER = ("random", "expert")
+#: models the demo also evaluates with ``--subgoals graph`` (JEPA models)
+GRAPH_MODELS = ("lewm", "pldm")
 PLOT_NAME = "success_rates.png"
 RESULTS_NAME = "results.json"
 #: the evaluation seeds start here, away from the seeds of the recorded episodes
@@ -108,7 +110,7 @@ def demo(
     num_envs: Annotated[int, typer.Option("--num-envs", parser=int_in(1), metavar="K", help="Environments stepped together.")] = 10,
 ) -> None:
     """Collect expert data, train a world model on it, evaluate random vs expert vs the model
-    planning with CEM, and write videos, a plot and results.json.
+    planning with CEM (LeWM / PLDM also with --subgoals graph), and write videos, a plot and results.json.
 
     Example: swm demo --env swm/TwoRoom-v2 --episodes 300 --out demo_outputs
     """
@@ -141,8 +143,8 @@ def demo(
         dataset = world.record_dataset(name, episodes=episodes, seed=seed)
     display_dataset_info(dataset_info(name))
 
-    policies: list[tuple[str, str]] = [(p, p) for p in POLICY_ORDER]
-    plan, model_record = None, None
+    policies: list[tuple[str, str, object]] = [(p, p, None) for p in POLICY_ORDER]  # (label, policy, plan)
+    model_record = None
     if learn:
         from ..planning.learned import PlanSettings
         from ..train import train
@@ -154,21 +156,25 @@ def demo(
         result = train(model, name, "tiny", steps=train_steps, name=run, seed=seed, progress=sys.stderr.isatty())
         con.print(f"{result.steps} steps in {result.seconds:.0f} s ({result.samples_per_second:.0f} samples/s), train loss {result.train_loss:.4f}; checkpoint {result.folder}", soft_wrap=True)
         plan = PlanSettings(solver="cem", samples=samples, iterations=iterations, seed=seed)
-        policies.append((f"{model}+cem", f"wm:{run}"))
+        policies.append((f"{model}+cem", f"wm:{run}", plan))
         model_record = {"run": run, "checkpoint": str(result.folder), "steps": result.steps, "train_seconds": round(result.seconds, 1), "plan": plan.as_dict()}
+        if model in GRAPH_MODELS:  # the same model and CEM, aiming at waypoints of the training data (--subgoals graph)
+            graph = PlanSettings(solver="cem", samples=samples, iterations=iterations, seed=seed, subgoals="graph")
+            policies.append((f"{model}+cem+graph", f"wm:{run}", graph))
+            model_record["plan_graph"] = graph.as_dict()
 
     eval_seed = seed + EVAL_SEED_OFFSET
-    con.rule(f"[{next(step)}/{total}] Evaluating {', '.join(label for label, _ in policies)} on the same {eval_episodes} seeds")
+    con.rule(f"[{next(step)}/{total}] Evaluating {', '.join(label for label, *_ in policies)} on the same {eval_episodes} seeds")
     summaries = []
     with make_world(env, min(num_envs, eval_episodes), image_size, max_steps, seed=eval_seed) as world:
-        for label, policy in policies:
+        for label, policy, plan in policies:
             results = evaluate_policy(world, policy, eval_episodes, eval_seed, plan=plan)
             summaries.append(SuccessSummary.from_results(label, results))
     con.print(success_table(f"{env}: seeds {eval_seed}..{eval_seed + eval_episodes - 1}, at most {max_steps} steps", summaries))
 
     con.rule(f"[{next(step)}/{total}] Recording one rollout video per policy")
     video_size = max(image_size, VIDEO_MIN_SIZE)  # the envs draw at any size: make the videos legible
-    videos = [_record_rollout(env, p, out / f"{label}.mp4", eval_seed, video_size, max_steps, plan=plan) for label, p in policies]
+    videos = [_record_rollout(env, p, out / f"{label}.mp4", eval_seed, video_size, max_steps, plan=plan) for label, p, plan in policies]
     con.print("Videos: " + ", ".join(str(v) for v in videos), soft_wrap=True)
 
     con.rule(f"[{next(step)}/{total}] Plotting success rates with 95% confidence intervals")

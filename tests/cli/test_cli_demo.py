@@ -64,6 +64,17 @@ def test_demo_writes_videos_plot_results_and_one_last_line(swm, tmp_path):
         assert name in last
 
 
+def test_demo_with_a_jepa_model_also_plans_with_subgoals(swm, tmp_path):
+    out = tmp_path / "demo"
+    args = (*BASE, "--model", "lewm", "--train-steps", "3", "--samples", "8", "--iterations", "1", "--num-envs", "2")
+    result = swm("demo", *args, "--out", str(out))
+    assert result.exit_code == 0, result.output
+    results = json.loads((out / "results.json").read_text())
+    assert list(results["policies"]) == ["random", "expert", "lewm+cem", "lewm+cem+graph"]
+    assert results["model"]["plan_graph"]["subgoals"] == "graph" and "subgoals" not in results["model"]["plan"]
+    assert (out / "lewm+cem+graph.mp4").is_file()
+
+
 def test_demo_rerun_replaces_its_dataset(swm, tmp_path):
     for _ in range(2):
         assert swm("demo", *TINY, "--out", str(tmp_path / "d")).exit_code == 0
