@@ -22,7 +22,7 @@ def test_fov_sweep_on_tworoom_with_the_expert_and_a_tiny_learned_model(swm, _sta
         world.record_dataset("tr", episodes=4, seed=0)
     train("lewm", "tr", "tiny", steps=2, name="tr-lewm", seed=0, device="cpu", progress=False, **TINY)
     train("gcbc", "tr", "tiny", steps=2, name="tr-gcbc", seed=0, device="cpu", progress=False, image_size=16, embed_dim=8, cnn_width=8,
-          depth=1, heads=2, dim_head=4, mlp_dim=16, batch_size=8, frameskip=1)
+          depth=3, heads=2, dim_head=4, mlp_dim=16, batch_size=8, frameskip=1)
 
     out = tmp_path / "sweep.json"
     result = swm("eval", ENV, "--policy", "expert,wm:tr-lewm,gc:tr-gcbc", "--fov-sweep", "agent,wall", "-n", "2", "--max-steps", "6",
