@@ -46,10 +46,12 @@ def plot_success_rates(summaries: Sequence[SuccessSummary], path: Path, title: s
     rates = [100 * s.rate for s in summaries]
     lows = [max(0.0, 100 * (s.rate - s.interval[0])) for s in summaries]  # rounding can make 0 a tiny negative
     highs = [max(0.0, 100 * (s.interval[1] - s.rate)) for s in summaries]
-    fig, ax = plt.subplots(figsize=(4.5, 3.6), dpi=120)
+    fig, ax = plt.subplots(figsize=(max(4.5, 1.3 * len(summaries)), 3.6), dpi=120)
     try:
-        colors = ["#9aa5b1", "#2f7ebc", "#3a9d5d", "#c4703a"][: len(summaries)]
-        bars = ax.bar([s.label for s in summaries], rates, yerr=[lows, highs], capsize=8, color=colors, edgecolor="black", linewidth=0.6)
+        palette = ["#9aa5b1", "#2f7ebc", "#3a9d5d", "#c4703a", "#8a5fb0", "#c9a227"]
+        colors = [palette[i % len(palette)] for i in range(len(summaries))]
+        labels = [s.label.replace("+", "\n+") for s in summaries]  # lewm+cem+graph on three short lines
+        bars = ax.bar(labels, rates, yerr=[lows, highs], capsize=8, color=colors, edgecolor="black", linewidth=0.6)
         for bar, s, top in zip(bars, summaries, highs):
             label = f"{100 * s.rate:.0f}% ({s.successes}/{s.episodes})"
             ax.annotate(label, (bar.get_x() + bar.get_width() / 2, 100 * s.rate + top + 2), ha="center", va="bottom", fontsize=8)
