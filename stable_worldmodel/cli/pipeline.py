@@ -125,7 +125,7 @@ def eval_cmd(
     receding_horizon: Annotated[int, typer.Option("--receding-horizon", parser=int_in(1), metavar="R", help="Blocks executed before replanning (MPC; at most H).")] = 1,
     samples: Annotated[int, typer.Option("--samples", parser=int_in(1), metavar="S", help="Candidates per solver iteration.")] = 300,
     iterations: Annotated[int, typer.Option("--iterations", parser=int_in(1), metavar="K", help="Solver iterations per plan.")] = 30,
-    cost: Annotated[str, typer.Option("--cost", metavar="C", help="min: the predicted step closest to the goal counts (reach it at any step); final: the last one (upstream's).")] = "min",
+    cost: Annotated[str, typer.Option("--cost", metavar="C", help="auto: min for goal-distance models, the model's own cost for the others (TD-MPC2); min: the predicted step closest to the goal counts (reach it at any step); final: the last one (upstream's).")] = "auto",
     subgoals: Annotated[str | None, typer.Option("--subgoals", metavar="METHOD", help="wm: policies: graph = plan towards waypoints on a latent graph of the run's training episodes (search on the replay buffer; takes detours the goal distance alone misses).", show_default=False)] = None,
     lookahead: Annotated[int | None, typer.Option("--lookahead", parser=int_in(1), metavar="L", help="With --subgoals graph: blocks along the graph path to the waypoint (default: H // 2).", show_default=False)] = None,
     device: Annotated[str, typer.Option("--device", metavar="DEV", help="Where wm: policies plan: auto, cpu, cuda, mps.")] = "auto",

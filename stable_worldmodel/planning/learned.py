@@ -23,6 +23,7 @@ __all__ = ["PlanSettings", "world_model_policy"]
 
 SOLVERS = ("cem", "icem", "mppi", "gd", "random")
 SUBGOALS = ("graph",)
+PLAN_COSTS = ("auto", *GOAL_COSTS)
 
 
 @dataclass(frozen=True)
@@ -30,8 +31,9 @@ class PlanSettings:
     """How to plan: solver name, horizon (blocks), receding horizon (blocks executed before
     replanning: 1 by default, ``None`` for the whole plan), samples, iterations, seed,
     and ``cost``: ``"min"`` scores a candidate by its predicted embedding closest to the goal's
-    (the goal may be reached before the horizon ends; the default), ``"final"`` by the last one
-    (upstream's ``criterion``). ``subgoals="graph"`` plans towards waypoints of a latent graph of
+    (the goal may be reached before the horizon ends), ``"final"`` by the last one (upstream's
+    ``criterion``), ``"auto"`` (the default): ``"min"`` for the models that score goal distance,
+    and the model's own cost for the others (TD-MPC2: reward and value), which take no other. ``subgoals="graph"`` plans towards waypoints of a latent graph of
     the training episodes (:mod:`~stable_worldmodel.planning.subgoals`), ``lookahead`` blocks
     ahead along its shortest path to the goal (default: half the horizon, see :attr:`waypoint_blocks`)."""
 
@@ -42,7 +44,7 @@ class PlanSettings:
     iterations: int = 30
     topk: int | None = None
     seed: int = 0
-    cost: str = "min"
+    cost: str = "auto"
     subgoals: str | None = None
     lookahead: int | None = None
     extra: dict[str, Any] = field(default_factory=dict)
@@ -52,10 +54,10 @@ class PlanSettings:
             from ..errors import unknown_name
 
             raise unknown_name("planning solver", self.solver, SOLVERS)
-        if self.cost not in GOAL_COSTS:
+        if self.cost not in PLAN_COSTS:
             from ..errors import unknown_name
 
-            raise unknown_name("goal cost", self.cost, GOAL_COSTS)
+            raise unknown_name("goal cost", self.cost, PLAN_COSTS)
         for name in ("horizon", "samples", "iterations"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
@@ -122,10 +124,11 @@ def world_model_policy(
     )
     for p in model.parameters():  # GD differentiates w.r.t. the actions only
         p.requires_grad_(False)
-    if not hasattr(model, "goal_cost") and settings.cost != "final":
-        raise ConfigError(f"PlanSettings(cost={settings.cost!r}) requires a model with goal_cost, got {type(model).__name__}; use cost='final'")
+    if not hasattr(model, "goal_cost") and settings.cost != "auto":
+        raise ConfigError(f"PlanSettings(cost={settings.cost!r}) requires a model with goal_cost, got {type(model).__name__} "
+                          f"(it plans on its own cost); use cost='auto'")
     if hasattr(model, "goal_cost"):
-        model.goal_cost = settings.cost
+        model.goal_cost = "min" if settings.cost == "auto" else settings.cost
     block = int(frameskip or protocol.get("frameskip", 1))
     config = PlanConfig(
         horizon=settings.horizon, receding_horizon=settings.receding_horizon or settings.horizon,

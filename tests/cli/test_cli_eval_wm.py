@@ -74,7 +74,7 @@ def test_eval_wm_writes_success_rate_interval_seeds_and_plan(swm, home, tmp_path
     assert 1 <= record["mean_length"] <= 10
     assert record["plan"] == {
         "solver": "cem", "horizon": 3, "receding_horizon": 1, "samples": 16, "iterations": 2, "topk": None, "seed": 0,
-        "cost": "min",
+        "cost": "auto",
     }
     model = record["model"]
     assert model["checkpoint"] == str(home / "checkpoints" / RUN)

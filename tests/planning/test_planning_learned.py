@@ -227,10 +227,10 @@ def test_plan_settings_receding_horizon_is_within_the_horizon():
 def test_plan_settings_cost_is_checked_and_reaches_the_model(home):
     with pytest.raises(UnknownNameError, match="Unknown goal cost 'mni'. Did you mean 'min'"):
         PlanSettings(cost="mni")
-    assert PlanSettings().cost == "min"
-    for cost in ("final", "min"):
+    assert PlanSettings().cost == "auto"
+    for cost, used in (("final", "final"), ("min", "min"), ("auto", "min")):
         policy, protocol = make(home, solver="cem", horizon=2, samples=8, iterations=1, cost=cost)
-        assert policy.solver.model.goal_cost == cost and protocol["plan"]["cost"] == cost
+        assert policy.solver.model.goal_cost == used and protocol["plan"]["cost"] == cost
 
 
 def _planned_actions(policy, steps: int = 4) -> np.ndarray:

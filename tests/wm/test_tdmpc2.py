@@ -208,6 +208,14 @@ def test_trains_on_the_toy_dataset(toy):
         assert loaded.get_action({keys.PIXELS: images(1, 1)}).shape == (1, A)
     protocol = json.loads((result.folder / "protocol.json").read_text())
     assert protocol["model"] == "tdmpc2"
+    # planned with by `swm eval --policy wm:td`: its own cost under the default cost="auto"; a goal cost is refused
+    from stable_worldmodel.errors import ConfigError
+    from stable_worldmodel.planning.learned import PlanSettings, world_model_policy
+
+    policy, plan_protocol = world_model_policy("td", PlanSettings(solver="mppi", horizon=2, samples=8, iterations=1), device="cpu")
+    assert plan_protocol["plan"]["cost"] == "auto" and policy.solver.model is not None
+    with pytest.raises(ConfigError, match="cost='min'.*TDMPC2.*own cost.*cost='auto'"):
+        world_model_policy("td", PlanSettings(cost="min"), device="cpu")
 
 
 def _write(home, name: str, columns: dict) -> str:
