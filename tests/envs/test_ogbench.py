@@ -288,7 +288,7 @@ def test_an_expert_cube_dataset_trains_lewm(tmp_path, monkeypatch):
     from stable_worldmodel.train import train
 
     monkeypatch.setenv("STABLEWM_HOME", str(tmp_path))
-    with World("swm/OGBCube-v0", 2, SIZE, max_episode_steps=12, verbose=0, vectorization_mode="sync") as world:
+    with World("swm/OGBCube-v0", 2, SIZE, max_episode_steps=12, verbose=0, vectorization_mode="sync", render_quality="low") as world:
         world.set_policy(expert_policy("swm/OGBCube-v0", noise=0.1, seed=0))
         world.record_dataset("cube", episodes=4, seed=0, cache_dir=tmp_path)
     data = HDF5Dataset("cube", cache_dir=tmp_path)

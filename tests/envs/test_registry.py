@@ -27,6 +27,12 @@ ENVS = [
 ]
 
 
+def fast(env_id: str) -> dict:
+    """Constructor kwargs that keep the smoke tests quick: MuJoCo envs render without shadows
+    (render_quality 'low', ~8x faster on a CPU renderer; the picture is not what these test)."""
+    return {"render_quality": "low"} if "mujoco" in get_entry(env_id).tags else {}
+
+
 def test_registry_lists_the_seed_envs():
     for env_id in ("swm/PushT-v1", "swm/PushT-Discrete-v1", "swm/TwoRoom-v2", "swm/SimplePointMaze-v0",
                    "swm/ImagePositioning-v1", "swm/VoidRun-v0"):
@@ -61,7 +67,7 @@ def test_register_env_is_idempotent_and_usable():
 
 @pytest.mark.parametrize("env_id", ENVS)
 def test_env_smoke(env_id):
-    env = gym.make(env_id, disable_env_checker=True).unwrapped
+    env = gym.make(env_id, disable_env_checker=True, **fast(env_id)).unwrapped
     check_env(env, skip_render_check=False)
     assert isinstance(env, SupportsRenderSize) and isinstance(env, SupportsEvalState)
     assert isinstance(env, SupportsDatasetReset)
@@ -70,7 +76,7 @@ def test_env_smoke(env_id):
     assert set(info) >= {keys.GOAL, keys.GOAL_STATE, keys.GOAL_PROPRIO}
 
     def rollout():
-        e = gym.make(env_id, disable_env_checker=True)
+        e = gym.make(env_id, disable_env_checker=True, **fast(env_id))
         e.unwrapped.set_render_size((32, 32))
         e.action_space.seed(0)
         actions = [e.action_space.sample() for _ in range(5)]
@@ -87,7 +93,7 @@ def test_env_smoke(env_id):
 @pytest.mark.parametrize("num_envs", [1, 8])
 @pytest.mark.parametrize("env_id", ENVS)
 def test_env_in_world_with_its_expert(env_id, num_envs):
-    world = swm.World(env_id, num_envs=num_envs, image_shape=(16, 16), verbose=0, vectorization_mode="sync")
+    world = swm.World(env_id, num_envs=num_envs, image_shape=(16, 16), verbose=0, vectorization_mode="sync", **fast(env_id))
     has_expert = get_entry(env_id).expert is not None  # DMControl domains without a scripted one: random
     world.set_policy(swm.envs.expert_policy(env_id) if has_expert else swm.policy.RandomPolicy(seed=0))
     world.reset(seed=0)
