@@ -33,9 +33,11 @@ class PlanSettings:
     and ``cost``: ``"min"`` scores a candidate by its predicted embedding closest to the goal's
     (the goal may be reached before the horizon ends), ``"final"`` by the last one (upstream's
     ``criterion``), ``"auto"`` (the default): ``"min"`` for the models that score goal distance,
-    and the model's own cost for the others (TD-MPC2: reward and value), which take no other. ``subgoals="graph"`` plans towards waypoints of a latent graph of
-    the training episodes (:mod:`~stable_worldmodel.planning.subgoals`), ``lookahead`` blocks
-    ahead along its shortest path to the goal (default: half the horizon, see :attr:`waypoint_blocks`)."""
+    and the model's own cost for the others (TD-MPC2: reward and value), which take no other.
+
+    ``subgoals="graph"`` plans towards waypoints of a latent graph of the training episodes
+    (:mod:`~stable_worldmodel.planning.subgoals`), ``lookahead`` blocks ahead along its shortest
+    path to the goal (default: half the horizon, see :attr:`waypoint_blocks`)."""
 
     solver: str = "cem"
     horizon: int = 5

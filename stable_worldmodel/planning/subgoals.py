@@ -6,19 +6,19 @@ first leads away from it. :class:`SubgoalGraph` (search on the replay buffer, Ey
 al. 2019, here in the model's latent space) builds a graph whose nodes are frames of the
 training episodes (every ``stride`` env steps, 1 by default) encoded by the model, with
 
-- **temporal edges**: from each node to the next one of its episode (weight 1: one stride);
+- **temporal edges**: from each node to the next one of its episode (one stride);
   these follow paths the data actually took, so they never cross a wall;
 - **neighbour edges** (both ways): between nodes whose embeddings are within ``radius`` of
   each other, ``radius`` being the ``radius_quantile`` of the temporal edges' latent lengths
-  (nodes that close are at most about one stride apart), weight 1 as well.
+  (nodes that close are at most about one stride apart).
 
 Path lengths count hops, so about strides: weighting the edges by latent length instead lets
 paths run through regions the encoder compresses, and the waypoints then lie far further
 than ``lookahead`` strides (measured on TwoRoom: behind the wall).
 
 :meth:`SubgoalGraph.waypoints` takes the current and goal embeddings of each env, finds the
-shortest path between their nearest nodes (Dijkstra, from the goal over reversed edges,
-cached per goal) and returns the embedding of the node ``lookahead`` strides along it, or the
+shortest path between their nearest nodes (a breadth-first search from the goal over
+reversed edges, cached per goal) and returns the embedding of the node ``lookahead`` strides along it, or the
 goal itself when the goal is within ``lookahead`` strides (or no path exists). The planner
 then minimises the latent distance to that waypoint instead of the goal.
 :class:`~stable_worldmodel.planning.world_model_policy.WorldModelPolicy` calls it at each
@@ -67,8 +67,6 @@ class SubgoalGraph:
         radius_quantile: float = 0.5,
         neighbors: int = 8,
     ):
-        from scipy.sparse import coo_matrix
-
         emb = torch.as_tensor(embeddings, dtype=torch.float32).detach().cpu()
         ep = np.asarray(episode).reshape(-1)
         if emb.ndim != 2 or len(emb) != len(ep) or len(emb) < 2:
@@ -81,33 +79,24 @@ class SubgoalGraph:
             raise ConfigError(f"SubgoalGraph requires neighbors >= 0 (an int), got {neighbors!r}")
         self.embeddings, self.episode, self.lookahead = emb, ep, int(lookahead)
         n = len(emb)
-        same = ep[1:] == ep[:-1]
-        src_t = np.nonzero(same)[0]
-        dst_t = src_t + 1
-        step = (emb[dst_t] - emb[src_t]).norm(dim=-1).numpy() if len(src_t) else np.ones(1)
-        self.step_length = float(np.median(step)) if len(src_t) else 1.0
+        src_t = np.nonzero(ep[1:] == ep[:-1])[0]  # temporal edges src -> src + 1
+        step = (emb[src_t + 1] - emb[src_t]).norm(dim=-1).numpy()
         self.radius = float(np.quantile(step, radius_quantile)) if len(src_t) else 0.0
-        src, dst, w = [src_t], [dst_t], [np.ones(len(src_t))]
+        src, dst = [src_t], [src_t + 1]
         if neighbors and self.radius > 0:
             k = min(int(neighbors) + 1, n)
             for lo in range(0, n, 2048):  # (2048, N) distances at a time
-                d2 = _pairwise_sq(emb[lo : lo + 2048], emb)
-                dist, idx = torch.topk(d2, k, dim=1, largest=False)
+                dist, idx = torch.topk(_pairwise_sq(emb[lo : lo + 2048], emb), k, dim=1, largest=False)
                 dist, idx = dist.sqrt().numpy(), idx.numpy()
-                rows = np.repeat(np.arange(lo, lo + len(idx)), k).reshape(len(idx), k)
+                rows = np.broadcast_to(np.arange(lo, lo + len(idx))[:, None], idx.shape)
                 keep = (dist <= self.radius * (1 + 1e-3)) & (idx != rows)  # float error of the expansion
-                for a, b in ((rows, idx), (idx, rows)):  # both ways
-                    src.append(a[keep])
-                    dst.append(b[keep])
-                    w.append(np.ones(int(keep.sum())))
-        src, dst, w = np.concatenate(src), np.concatenate(dst), np.concatenate(w)
-        # reversed graph (dst -> src) for one Dijkstra from each goal; duplicates keep the minimum
-        order = np.lexsort((w, src, dst))
-        src, dst, w = src[order], dst[order], w[order]
-        first = np.ones(len(src), bool)
-        first[1:] = (src[1:] != src[:-1]) | (dst[1:] != dst[:-1])
-        self._reverse = coo_matrix((w[first], (dst[first], src[first])), shape=(n, n)).tocsr()
-        self.num_edges = int(first.sum())
+                src += [rows[keep], idx[keep]]  # both ways
+                dst += [idx[keep], rows[keep]]
+        pairs = np.unique(np.stack([np.concatenate(dst), np.concatenate(src)], 1), axis=0)  # sorted by dst
+        # reversed adjacency (CSR): the nodes with an edge *into* each node, for a search from the goal
+        self._into_ptr = np.searchsorted(pairs[:, 0], np.arange(n + 1))
+        self._into = pairs[:, 1]
+        self.num_edges = len(pairs)
         self._cache: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
     def __repr__(self) -> str:
@@ -119,14 +108,24 @@ class SubgoalGraph:
         return _pairwise_sq(emb.detach().float().cpu(), self.embeddings).argmin(dim=1).numpy()
 
     def _to_goal(self, goal_node: int) -> tuple[np.ndarray, np.ndarray]:
-        """Distances to ``goal_node`` and the next node towards it, for every node (cached)."""
+        """Hops to ``goal_node`` (inf: no path) and the next node towards it, for every node: a
+        breadth-first search from the goal over reversed edges, one vectorized level at a time (cached)."""
         if goal_node not in self._cache:
-            from scipy.sparse.csgraph import dijkstra
-
             if len(self._cache) > 256:
                 self._cache.clear()
-            dist, pred = dijkstra(self._reverse, directed=True, indices=goal_node, return_predecessors=True)
-            self._cache[goal_node] = (dist, pred)
+            n = len(self._into_ptr) - 1
+            dist, nxt = np.full(n, np.inf), np.full(n, -1, np.int64)
+            dist[goal_node], frontier, level = 0.0, np.array([goal_node]), 0
+            while len(frontier):
+                level += 1
+                counts = self._into_ptr[frontier + 1] - self._into_ptr[frontier]
+                parent = np.repeat(frontier, counts)
+                cand = self._into[np.repeat(self._into_ptr[frontier] - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())]
+                new = np.isinf(dist[cand])
+                cand, first = np.unique(cand[new], return_index=True)
+                dist[cand], nxt[cand] = level, parent[new][first]
+                frontier = cand
+            self._cache[goal_node] = (dist, nxt)
         return self._cache[goal_node]
 
     def path(self, start_node: int, goal_node: int) -> list[int]:
