@@ -156,11 +156,9 @@ def _subgoal_graph(run: str, model: Any, protocol: dict, transform: dict, block:
     waypoints ``lookahead`` action blocks of ``block`` env steps ahead."""
     from .. import keys
     from ..data import HDF5Dataset
-    from ..wm.jepa import JEPA
     from .subgoals import build_subgoal_graph
 
-    if not isinstance(model, JEPA):
-        raise ConfigError(f"subgoals='graph' requires a JEPA world model (lewm, pldm), got {type(model).__name__} for run {run!r}")
+    _WaypointHook.check(model, run)
     name, episodes = protocol.get("dataset"), protocol.get("train_episodes")
     if not name or episodes is None:
         raise ConfigError(f"subgoals='graph' requires a run trained by swm train (its protocol names the dataset and "
@@ -170,8 +168,8 @@ def _subgoal_graph(run: str, model: Any, protocol: dict, transform: dict, block:
         dataset = HDF5Dataset(path=path, keys_to_load=[keys.PIXELS]) if path and _exists(path) else HDF5Dataset(name, keys_to_load=[keys.PIXELS], cache_dir=cache_dir)
     except FileNotFoundError as exc:
         raise ConfigError(f"subgoals='graph' requires run {run!r}'s training dataset {name!r}: {exc}") from exc
-    return build_subgoal_graph(model.encode_pixels, dataset, episodes, transform[keys.PIXELS], device=dev,
-                               lookahead_steps=max(1, int(lookahead)) * block)
+    return build_subgoal_graph(lambda x: model.encode_pixels(x).flatten(1), dataset, episodes, transform[keys.PIXELS],
+                               device=dev, lookahead_steps=max(1, int(lookahead)) * block)
 
 
 def _exists(path: str) -> bool:
@@ -181,24 +179,45 @@ def _exists(path: str) -> bool:
 
 
 class _WaypointHook:
-    """``WorldModelPolicy.info_hook``: encode the frames and the goal once, put the graph's
-    waypoint in place of the goal embedding (the JEPA cost reads ``goal_emb`` when present)."""
+    """``WorldModelPolicy.info_hook``: encode the frames and the goal once, and put the graph's
+    waypoint where the model's cost reads the encoded goal: ``goal_emb`` (LeWM, PLDM: ``(B, 1, D)``)
+    or ``pixels_goal_emb`` (PreJEPA without proprio: patch features ``(B, 1, P, Dv)``). Graph nodes
+    are the flattened embeddings."""
 
     def __init__(self, model: Any, graph: Any):
         self.model, self.graph = model, graph
+        self.context_key, self.goal_key = self.keys(model)
+
+    @staticmethod
+    def keys(model: Any) -> tuple[str, str]:
+        """The info keys the model caches its context and goal embeddings under."""
+        from ..wm.jepa import EMB, GOAL_EMB, JEPA
+        from ..wm.prejepa.prejepa import PIXELS_EMB, PreJEPA
+
+        if isinstance(model, JEPA):
+            return EMB, GOAL_EMB
+        if isinstance(model, PreJEPA) and not model.state_keys:
+            return PIXELS_EMB, f"pixels_{GOAL_EMB}"
+        raise ConfigError(f"subgoals='graph' requires LeWM, PLDM or a PreJEPA without proprio, got {type(model).__name__}")
+
+    @classmethod
+    def check(cls, model: Any, run: str) -> None:
+        try:
+            cls.keys(model)
+        except ConfigError as exc:
+            raise ConfigError(f"{exc} (run {run!r})") from None
 
     def __call__(self, info: dict) -> dict:
         import torch
 
         from .. import keys
-        from ..wm.jepa import EMB, GOAL_EMB
 
         dev = next(self.model.parameters()).device
         with torch.inference_mode():
-            emb = self.model.encode_pixels(info[keys.PIXELS].to(dev))  # (B, T, D)
-            goal = self.model.encode_pixels(info[keys.GOAL].to(dev))[:, -1]  # (B, D)
-            waypoint = self.graph.waypoints(emb[:, -1], goal)
-        info[EMB], info[GOAL_EMB] = emb, waypoint[:, None]
+            emb = self.model.encode_pixels(info[keys.PIXELS].to(dev))  # (B, T, ...)
+            goal = self.model.encode_pixels(info[keys.GOAL].to(dev))[:, -1]  # (B, ...)
+            waypoint = self.graph.waypoints(emb[:, -1].flatten(1), goal.flatten(1)).reshape(goal.shape)
+        info[self.context_key], info[self.goal_key] = emb, waypoint[:, None]
         return info
 
 
