@@ -30,20 +30,21 @@ CUBE_FACTORS = ["agent.color", "agent.ee_start_position", "camera.angle_delta", 
                 "cube.goal_yaw", "cube.size", "cube.start_position", "cube.start_yaw", "floor.color", "light.intensity"]
 
 
-@pytest.fixture(scope="module")
-def cube():
-    env = CubeEnv()
+def _small(cls):
+    env = cls()
     env.set_render_size(SIZE)
     yield env
     env.close()
+
+
+@pytest.fixture(scope="module")
+def cube():
+    yield from _small(CubeEnv)
 
 
 @pytest.fixture(scope="module")
 def scene():
-    env = SceneEnv()
-    env.set_render_size(SIZE)
-    yield env
-    env.close()
+    yield from _small(SceneEnv)
 
 
 def rollout(env, seed, options, steps=1):
