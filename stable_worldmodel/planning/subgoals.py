@@ -144,13 +144,9 @@ class SubgoalGraph:
         out = goal.clone()
         starts, goals = self.nearest(current), self.nearest(goal)
         for i, (s, g) in enumerate(zip(starts, goals)):
-            dist, nxt = self._to_goal(int(g))
-            if not np.isfinite(dist[s]) or dist[s] <= self.lookahead:
-                continue
-            node = int(s)
-            while dist[s] - dist[node] < self.lookahead and node != g:
-                node = int(nxt[node])
-            out[i] = self.embeddings[node].to(out)
+            path = self.path(int(s), int(g))  # [] when unreachable
+            if len(path) > self.lookahead + 1:  # farther than the lookahead: the node that far along
+                out[i] = self.embeddings[path[self.lookahead]].to(out)
         return out
 
 
