@@ -222,10 +222,11 @@ class Trainer:
         was_training = self.model.training
         self.model.eval()
         total, count = 0.0, 0
+        key = getattr(self.model, "validation_loss", "loss")  # e.g. TD-MPC2: its world model's part, without the actor's
         with torch.no_grad(), self._autocast():
             for index in batches:
                 out = self.model.loss(self.data.batch(index))
-                total += float(out["loss"]) * len(index)
+                total += float(out[key]) * len(index)
                 count += len(index)
         self.model.train(was_training)
         return total / count

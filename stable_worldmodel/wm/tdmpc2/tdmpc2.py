@@ -116,6 +116,9 @@ class TDMPC2(nn.Module):
     expected in ``symexp([vmin, vmax])``.
     """
 
+    #: the term of :meth:`loss` the trainer's validation reports (``val/loss``)
+    validation_loss = "model_loss"
+
     def __init__(self, cfg: Any, extra_encoders: nn.ModuleDict | Mapping[str, nn.Module] | None = None):
         super().__init__()
         self.cfg = c = _read_cfg(cfg)
@@ -320,7 +323,9 @@ class TDMPC2(nn.Module):
         - ``pi_loss``: ``-(Q / scale + entropy_coef * entropy)`` of the prior on detached latents
           (Q: the mean of two random heads, which this term does not train).
 
-        ``loss = consistency_coef * consistency + reward_coef * reward + value_coef * value + pi``.
+        ``loss = consistency_coef * consistency + reward_coef * reward + value_coef * value + pi``;
+        ``model_loss`` is ``loss`` without ``pi`` (the world model's part, which the trainer
+        validates: ``pi`` is ``-Q`` and falls as the values grow, so ``loss`` need not).
         In training mode it also updates the Q scale and moves ``target_qs`` by ``tau`` towards ``qs``.
         """
         who = f"{type(self).__name__}.loss"
@@ -359,8 +364,9 @@ class TDMPC2(nn.Module):
             with torch.no_grad():
                 for p, p_target in zip(self.qs.parameters(), self.target_qs.parameters()):
                     p_target.lerp_(p, wm["tau"])
-        return {"loss": total, "consistency_loss": consistency, "reward_loss": reward_loss, "value_loss": value_loss,
-                "pi_loss": pi_loss, "emb": emb}
+        model_loss = total - pi_loss
+        return {"loss": total, "model_loss": model_loss, "consistency_loss": consistency, "reward_loss": reward_loss,
+                "value_loss": value_loss, "pi_loss": pi_loss, "emb": emb}
 
     def _pi_loss(self, zs: torch.Tensor) -> torch.Tensor:
         """Policy term on detached latents ``zs (B, H, L)``; the Q heads get no gradient from it."""
