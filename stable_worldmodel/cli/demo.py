@@ -157,7 +157,7 @@ def demo(
         shutil.rmtree(checkpoint_root() / run, ignore_errors=True)
         result = train(model, name, "tiny", steps=train_steps, name=run, seed=seed, progress=sys.stderr.isatty())
         con.print(f"{result.steps} steps in {result.seconds:.0f} s ({result.samples_per_second:.0f} samples/s), train loss {result.train_loss:.4f}; checkpoint {result.folder}", soft_wrap=True)
-        plan = PlanSettings(solver="cem", samples=samples, iterations=iterations, seed=seed)
+        plan = PlanSettings(solver="cem", samples=samples, iterations=iterations, seed=seed, subgoals="none")
         policies.append((f"{model}+cem", f"wm:{run}", plan))
         model_record = {"run": run, "checkpoint": str(result.folder), "steps": result.steps, "train_seconds": round(result.seconds, 1), "plan": plan.as_dict()}
         if model in GRAPH_MODELS:  # the same model and CEM, aiming at waypoints of the training data (--subgoals graph)

@@ -62,6 +62,10 @@ def evaluate_cli(
     """Evaluate ``policy`` and return its summary, a table title and the JSON record (``ray``:
     the episodes spread over Ray tasks, see :func:`stable_worldmodel.world.on_ray.evaluate_on_ray`)."""
     start = time.perf_counter()
+    if plan is not None and policy.startswith("wm:"):  # subgoals='auto' -> what this run gets, recorded as such
+        from ..planning.learned import resolve_subgoals
+
+        plan = resolve_subgoals(checkpoint_run(policy), plan)
     record: dict[str, Any] = {"env": env, "policy": policy, "episodes": episodes, "seed": seed, "num_envs": num_envs, "image_size": image_size}
     limit = budget if from_dataset else max_steps
     history = policy_history(policy)

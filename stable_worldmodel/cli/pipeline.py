@@ -126,8 +126,9 @@ def eval_cmd(
     samples: Annotated[int, typer.Option("--samples", parser=int_in(1), metavar="S", help="Candidates per solver iteration.")] = 300,
     iterations: Annotated[int, typer.Option("--iterations", parser=int_in(1), metavar="K", help="Solver iterations per plan.")] = 30,
     cost: Annotated[str, typer.Option("--cost", metavar="C", help="auto: min for goal-distance models, the model's own cost for the others (TD-MPC2); min: the predicted step closest to the goal counts (reach it at any step); final: the last one (upstream's).")] = "auto",
-    subgoals: Annotated[str | None, typer.Option("--subgoals", metavar="METHOD", help="wm: policies: graph = plan towards waypoints on a latent graph of the run's training episodes (search on the replay buffer; takes detours the goal distance alone misses).", show_default=False)] = None,
-    lookahead: Annotated[int | None, typer.Option("--lookahead", parser=int_in(1), metavar="L", help="With --subgoals graph: blocks along the graph path to the waypoint (default: H // 2).", show_default=False)] = None,
+    subgoals: Annotated[str | None, typer.Option("--subgoals", metavar="METHOD", help="wm: policies: graph = plan towards waypoints on a latent graph of the run's training episodes (search on the replay buffer; takes detours the goal distance alone misses); none = plan on the goal alone (plain MPC, as papers report); auto = on the goal alone, and on the graph's waypoints once an episode stops getting closer (LeWM / PLDM / PreJEPA runs whose training dataset is on disk; else none).")] = "auto",
+    lookahead: Annotated[int | None, typer.Option("--lookahead", parser=int_in(1), metavar="L", help="With --subgoals graph or auto: blocks along the graph path to the waypoint (default: H // 2).", show_default=False)] = None,
+    patience: Annotated[int | None, typer.Option("--patience", parser=int_in(1), metavar="STEPS", help="With --subgoals auto: env steps without progress towards the goal before an episode aims at waypoints (default: H x the action block // 2, at least 10).", show_default=False)] = None,
     device: Annotated[str, typer.Option("--device", metavar="DEV", help="Where wm: policies plan: auto, cpu, cuda, mps.")] = "auto",
     json_path: Annotated[Path | None, typer.Option("--json", metavar="FILE", help="Write success rate, 95% CI, episodes, seeds and the protocol as JSON.", dir_okay=False)] = None,
     from_dataset: Annotated[str | None, typer.Option("--from-dataset", metavar="NAME", help="Start from held-out episodes of this dataset (upstream's protocol).", show_default=False)] = None,
@@ -169,9 +170,9 @@ def eval_cmd(
         from ..planning.learned import PlanSettings
 
         plan = PlanSettings(solver=solver, horizon=horizon, receding_horizon=receding_horizon, samples=samples, iterations=iterations, seed=seed, cost=cost,
-                            subgoals=subgoals, lookahead=lookahead)
-    elif subgoals is not None or lookahead is not None:
-        raise typer.BadParameter("applies to wm:RUN policies only", param_hint="--subgoals/--lookahead")
+                            subgoals=subgoals, lookahead=lookahead, patience=patience)
+    elif subgoals != "auto" or lookahead is not None or patience is not None:
+        raise typer.BadParameter("applies to wm:RUN policies only", param_hint="--subgoals/--lookahead/--patience")
     max_steps = episode_limit(env, max_steps)
     out = console()
     if fov_sweep is not None:

@@ -40,7 +40,7 @@ from ..errors import ConfigError
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["SubgoalGraph", "build_subgoal_graph"]
+__all__ = ["StallMonitor", "SubgoalGraph", "build_subgoal_graph"]
 
 
 def _pairwise_sq(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
@@ -148,6 +148,54 @@ class SubgoalGraph:
             if len(path) > self.lookahead + 1:  # farther than the lookahead: the node that far along
                 out[i] = self.embeddings[path[self.lookahead]].to(out)
         return out
+
+
+class StallMonitor:
+    """Which envs stopped getting closer to their goal (``subgoals="auto"``).
+
+    Each :meth:`update` (one replan, ``steps_per_call`` env steps after the last) measures every
+    env's latent distance to its goal. An env whose distance has not come ``tolerance`` below the
+    distance of its last progress (at first: its starting distance) for ``patience`` env steps is
+    *stalled* from then on, until its goal changes or it
+    restarts (a new episode), when it starts over.
+
+    Args:
+        patience: env steps without progress before an env counts as stalled (>= 1).
+        steps_per_call: env steps between two updates (the plan's executed steps).
+        tolerance: the least improvement that counts as progress (a latent length).
+    """
+
+    def __init__(self, patience: int, steps_per_call: int = 1, tolerance: float = 0.0):
+        for name, value in (("patience", patience), ("steps_per_call", steps_per_call)):
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+                raise ConfigError(f"StallMonitor requires {name} to be a positive int, got {value!r}")
+        if not tolerance >= 0:
+            raise ConfigError(f"StallMonitor requires tolerance >= 0, got {tolerance!r}")
+        self.patience, self.steps_per_call, self.tolerance = int(patience), int(steps_per_call), float(tolerance)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget every env's progress."""
+        self._goal: torch.Tensor | None = None  # (B, D) the goals being tracked
+        self._best = self._idle = self._stalled = None  # (B,) distance at the last progress, steps since, stalled
+
+    def update(self, current: torch.Tensor, goal: torch.Tensor, restarted: Any = None) -> torch.Tensor:
+        """``current, goal: (B, D)``, ``restarted: (B,)`` bool or None -> ``(B,)`` bool: stalled envs."""
+        dist = (goal - current).norm(dim=-1).float().cpu()
+        goal = goal.detach().float().cpu()
+        if self._goal is None or self._goal.shape != goal.shape:
+            self._goal, self._best = goal.clone(), dist.clone()
+            self._idle, self._stalled = torch.zeros(len(dist), dtype=torch.long), torch.zeros(len(dist), dtype=torch.bool)
+            return self._stalled.clone()
+        new = (goal - self._goal).abs().amax(dim=-1) > 1e-5
+        if restarted is not None:
+            new |= torch.as_tensor(restarted, dtype=torch.bool).reshape(-1).cpu()
+        self._goal[new], self._best[new], self._stalled[new] = goal[new], dist[new], False
+        progress = dist < self._best - self.tolerance  # creeping counts once it adds up to the tolerance
+        self._best = torch.where(progress, dist, self._best)
+        self._idle = torch.where(progress | new, 0, self._idle + self.steps_per_call)
+        self._stalled |= self._idle >= self.patience
+        return self._stalled.clone()
 
 
 def build_subgoal_graph(

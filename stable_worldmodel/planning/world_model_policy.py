@@ -105,6 +105,8 @@ class WorldModelPolicy(BasePolicy):
         self._pos = 0
         self._next_init: torch.Tensor | None = None
         self.predicted_frames = None
+        if callable(getattr(self.info_hook, "reset", None)):  # e.g. the subgoal hook's progress per env
+            self.info_hook.reset()
 
     def set_env(self, env: Any) -> None:
         """Attach the env and configure the solver for its batched action space.

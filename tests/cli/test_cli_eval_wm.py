@@ -74,7 +74,7 @@ def test_eval_wm_writes_success_rate_interval_seeds_and_plan(swm, home, tmp_path
     assert 1 <= record["mean_length"] <= 10
     assert record["plan"] == {
         "solver": "cem", "horizon": 3, "receding_horizon": 1, "samples": 16, "iterations": 2, "topk": None, "seed": 0,
-        "cost": "auto",
+        "cost": "auto", "subgoals": "auto", "lookahead": 1, "patience": 10,  # auto: the graph of its 9 training episodes
     }
     model = record["model"]
     assert model["checkpoint"] == str(home / "checkpoints" / RUN)
@@ -165,8 +165,10 @@ def test_eval_bad_plan_settings_are_one_line(swm, home, error_line, options, nee
     [
         (("--cost", "final", "--receding-horizon", "3"), {"cost": "final", "receding_horizon": 3}),
         (("--subgoals", "graph", "--lookahead", "2"), {"subgoals": "graph", "lookahead": 2}),
+        (("--subgoals", "none"), {"subgoals": "none"}),
+        (("--patience", "4"), {"subgoals": "auto", "patience": 4}),
     ],
-    ids=["final-cost", "subgoals"],
+    ids=["final-cost", "subgoals", "plain", "patience"],
 )
 def test_eval_plan_settings_are_recorded(swm, home, tmp_path, options, recorded):
     out = tmp_path / "out.json"
@@ -175,6 +177,19 @@ def test_eval_plan_settings_are_recorded(swm, home, tmp_path, options, recorded)
     assert result.exit_code == 0, result.output
     plan = json.loads(out.read_text())["plan"]
     assert {k: plan[k] for k in recorded} == recorded
+
+
+def test_auto_subgoals_plan_on_the_goal_alone_without_the_training_dataset(swm, home, tmp_path):
+    (home / "toy.h5").unlink()
+    record = protocol(home)
+    del record["dataset_path"]  # the template's file: found by name in this home only
+    (home / "checkpoints" / RUN / "protocol.json").write_text(json.dumps(record))
+    out = tmp_path / "out.json"
+    args = ("eval", TOY, "--policy", f"wm:{RUN}", "--episodes", "2", "--num-envs", "2", "--max-steps", "4", *PLAN, *SMALL)
+    result = swm(*args, "--json", str(out))
+    assert result.exit_code == 0, result.output
+    plan = json.loads(out.read_text())["plan"]
+    assert plan["subgoals"] == "none" and "patience" not in plan and "lookahead" not in plan
 
 
 def test_subgoals_need_a_wm_policy(swm, error_line):

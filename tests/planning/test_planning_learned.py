@@ -132,7 +132,10 @@ def test_every_solver_plans_and_encodes_context_and_goal_once_per_plan(home, sol
         assert len(spy) == 1 and len(encoded) == 2
         world.step()  # a new plan, encoded once more
         assert len(spy) == 2 and encoded == [2, 2, 2, 2]
-    assert protocol["plan"] == PlanSettings(**settings).as_dict()
+    expected = PlanSettings(**settings).as_dict()
+    assert {k: v for k, v in protocol["plan"].items() if k in expected} == expected
+    # subgoals="auto" on a LeWM whose dataset is on disk: the graph, and the least patience (3 x 1 steps < 10)
+    assert protocol["plan"]["subgoals"] == "auto" and protocol["plan"]["patience"] == 10
     assert protocol["device"] == "cpu" and protocol["action_block"] == 1
 
 
@@ -261,9 +264,26 @@ def test_subgoal_graph_is_built_from_the_training_split_and_redirects_the_goal(h
         goal = model.encode_pixels(policy.transform[keys.GOAL](torch.as_tensor(world.infos[keys.GOAL][:, -1]).permute(0, 3, 1, 2)))
     assert seen[0].shape == (2, 1, goal.shape[-1]) and not torch.allclose(seen[0][:, 0], goal)  # a waypoint, not the goal
     far, _ = make(home, **settings, subgoals="graph", lookahead=10_000)
-    plain, _ = make(home, **settings)
+    plain, _ = make(home, **settings, subgoals="none")
     np.testing.assert_array_equal(_planned_actions(far), _planned_actions(plain))
     assert not np.array_equal(redirected, _planned_actions(plain))
+
+
+def test_auto_subgoals_aim_at_waypoints_only_once_an_episode_stalls(home, monkeypatch):
+    """``subgoals="auto"``: the goal while the monitor sees progress (4 steps < patience 10: the
+    plain plans), the graph's waypoints for the envs it calls stalled (all: the graph's plans)."""
+    from stable_worldmodel.planning.subgoals import StallMonitor
+
+    settings = dict(solver="cem", horizon=2, receding_horizon=1, samples=16, iterations=2, lookahead=1)
+    auto, protocol = make(home, **settings)
+    assert protocol["plan"]["subgoals"] == "auto" and protocol["plan"]["patience"] == 10
+    plain, _ = make(home, **settings, subgoals="none")
+    np.testing.assert_array_equal(_planned_actions(auto), _planned_actions(plain))
+    graph, _ = make(home, **settings, subgoals="graph")
+    monkeypatch.setattr(StallMonitor, "update", lambda self, current, goal, restarted=None: torch.ones(len(goal), dtype=torch.bool))
+    stalled, _ = make(home, **settings)
+    np.testing.assert_array_equal(_planned_actions(stalled), _planned_actions(graph))
+    assert not np.array_equal(_planned_actions(stalled), _planned_actions(plain))
 
 
 def _dataset_lengths(home):

@@ -12,7 +12,7 @@ import torch
 
 from stable_worldmodel.errors import ConfigError, UnknownNameError
 from stable_worldmodel.planning.learned import PlanSettings
-from stable_worldmodel.planning.subgoals import SubgoalGraph
+from stable_worldmodel.planning.subgoals import StallMonitor, SubgoalGraph
 
 STEP = 0.05
 
@@ -109,4 +109,49 @@ def test_plan_settings_check_subgoals():
     assert plan["subgoals"] == "graph" and plan["lookahead"] == 3  # half the horizon
     assert PlanSettings(horizon=1, subgoals="graph").waypoint_blocks == 1
     assert PlanSettings(horizon=7, subgoals="graph", lookahead=5).as_dict()["lookahead"] == 5
-    assert "subgoals" not in PlanSettings().as_dict()
+    assert PlanSettings().subgoals == "auto" and PlanSettings().as_dict()["subgoals"] == "auto"
+    for plain in (None, "none"):
+        assert PlanSettings(subgoals=plain).as_dict()["subgoals"] == "none" and "lookahead" not in PlanSettings(subgoals=plain).as_dict()
+    assert PlanSettings(patience=7).as_dict()["patience"] == 7
+    with pytest.raises(ConfigError, match="patience to be a positive int"):
+        PlanSettings(patience=0)
+
+
+def _at(*distances: float) -> tuple[torch.Tensor, torch.Tensor]:
+    """``(current, goal)`` of envs at these distances from the goal (1-D embeddings, goal at 0)."""
+    return torch.tensor(distances, dtype=torch.float32)[:, None], torch.zeros(len(distances), 1)
+
+
+def test_stall_monitor_flags_an_env_that_stops_getting_closer():
+    mon = StallMonitor(patience=10, steps_per_call=5, tolerance=1.0)
+    assert mon.update(*_at(20.0, 20.0)).tolist() == [False, False]  # the first replan only measures
+    assert mon.update(*_at(15.0, 20.0)).tolist() == [False, False]  # env 1: 5 steps without progress
+    assert mon.update(*_at(10.0, 19.5)).tolist() == [False, True]  # 10 steps: 0.5 < tolerance is no progress
+    assert mon.update(*_at(10.0, 5.0)).tolist() == [False, True]  # once stalled, it stays stalled
+    assert mon.update(*_at(9.6, 5.0)).tolist() == [True, True]  # env 0: 0.4 closer in 10 steps
+
+
+def test_stall_monitor_creeping_progress_adds_up():
+    mon = StallMonitor(patience=2, steps_per_call=1, tolerance=1.0)
+    flags = [mon.update(*_at(d))[0].item() for d in (10.0, 9.4, 8.8, 8.2, 7.6, 7.0)]
+    assert flags == [False] * 6  # 0.6 per step: progress of >= 1 every second step
+
+
+def test_stall_monitor_starts_over_on_a_new_goal_or_a_restart():
+    mon = StallMonitor(patience=1, steps_per_call=1)
+    mon.update(*_at(3.0, 3.0))
+    assert mon.update(*_at(3.0, 3.0)).tolist() == [True, True]
+    current, goal = _at(3.0, 3.0)
+    goal[0] = 1.0  # env 0: a new episode with another goal
+    assert mon.update(current, goal, restarted=torch.tensor([False, True])).tolist() == [False, False]
+    mon.reset()
+    assert mon.update(*_at(3.0, 3.0)).tolist() == [False, False]
+
+
+def test_stall_monitor_checks_its_arguments():
+    with pytest.raises(ConfigError, match="patience to be a positive int, got 0"):
+        StallMonitor(patience=0)
+    with pytest.raises(ConfigError, match="steps_per_call"):
+        StallMonitor(patience=3, steps_per_call=True)
+    with pytest.raises(ConfigError, match="tolerance >= 0"):
+        StallMonitor(patience=3, tolerance=-1.0)
