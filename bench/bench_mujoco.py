@@ -9,12 +9,14 @@ plus ``pip install "mujoco>=3.17,<4" dm_control ogbench``) when it exists. Each 
 fresh process. Figures only, no assertions.
 
 Usage: python bench/bench_mujoco.py [--envs swm/OGBCube-v0 ...] [--counts 1 4] [--steps 200]
+       [--quality low medium high] [--repeat 3]   (--repeat: interleaved rounds, median shown)
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import statistics
 import subprocess
 import sys
 from pathlib import Path
@@ -55,23 +57,28 @@ def main() -> None:
     parser.add_argument("--envs", nargs="+", default=["swm/OGBCube-v0", "swm/CartpoleDMControl-v0"])
     parser.add_argument("--counts", nargs="+", type=int, default=[1, 4])
     parser.add_argument("--steps", type=int, default=200)
+    parser.add_argument("--quality", nargs="+", default=["medium", "high"], choices=["low", "medium", "high"],
+                        help="our render_quality levels to measure (upstream has one)")
+    parser.add_argument("--repeat", type=int, default=1,
+                        help="rounds; each round runs every configuration once, interleaved, and the median is shown")
     args = parser.parse_args()
     peer = str(PEER) if PEER.exists() else None
     print(f"World steps/s, 64x64 pixels, random policy; upstream 0.1.1: {peer or 'not found (ratio not measured)'}")
+    runs = [(f"ours {q}", sys.executable, q) for q in args.quality] + ([("upstream", peer, "-")] if peer else [])
     for env_id in args.envs:
         for n in args.counts:
-            row = {}
-            for label, python, quality in (("ours medium", sys.executable, "medium"), ("ours high", sys.executable, "high"),
-                                           ("upstream", peer, "-")):
-                if python is None:
-                    continue
-                result = measure(python, env_id, n, args.steps, quality)
-                if result is not None:
-                    row[label] = result["steps_per_s"]
-            ratio = f"  ours/upstream {row['ours medium'] / row['upstream']:.1f}x (high: {row['ours high'] / row['upstream']:.1f}x)" \
-                if "upstream" in row and "ours medium" in row and "ours high" in row else ""
-            figures = ", ".join(f"{k} {v:.1f}" for k, v in row.items())
-            print(f"  {env_id:28s} {n} env(s): {figures}{ratio}", flush=True)
+            samples: dict[str, list[float]] = {label: [] for label, _, _ in runs}
+            for _ in range(args.repeat):  # interleaved: every configuration sees the same machine load
+                for label, python, quality in runs:
+                    result = measure(python, env_id, n, args.steps, quality)
+                    if result is not None:
+                        samples[label].append(result["steps_per_s"])
+            row = {k: statistics.median(v) for k, v in samples.items() if v}
+            figures = ", ".join(f"{k} {v:.1f}" + (f" ({'/'.join(f'{x:.1f}' for x in samples[k])})" if len(samples[k]) > 1 else "")
+                                for k, v in row.items())
+            ratios = ", ".join(f"{k[5:]} {v / row['upstream']:.1f}x" for k, v in row.items()
+                               if k.startswith("ours") and "upstream" in row)
+            print(f"  {env_id:28s} {n} env(s): {figures}" + (f"  ours/upstream: {ratios}" if ratios else ""), flush=True)
 
 
 if __name__ == "__main__":

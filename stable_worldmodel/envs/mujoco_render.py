@@ -33,6 +33,8 @@ from ..errors import ConfigError, did_you_mean
 #: ``"medium"`` (the default): the shadow map scaled to the frame (8x its larger side, 256 to
 #: 4096 px), which draws the same picture (mean absolute difference ~1/255 at 64x64) ~2x faster;
 #: ``"low"``: no shadows, no multisampling, ~8x faster than ``"high"``, a visibly flatter picture.
+#: Env families may also draw lighter meshes below ``"high"`` (``MjRenderer(mesh_model=...)``;
+#: the OGBench arm: :mod:`stable_worldmodel.envs.ogbench.meshes`).
 RENDER_QUALITIES = ("low", "medium", "high")
 
 
@@ -113,20 +115,46 @@ def _close_live_renderers() -> None:
             pass
 
 
+def _matching_mesh_model(model, mesh_model):
+    """``mesh_model`` after checking it matches ``model`` and copying ``model``'s textures and
+    statistics (shadow and fog extents) into it."""
+    counts = ("ngeom", "nmesh", "ntex", "ntexdata", "nmat", "nskin", "nflex", "nlight", "ncam")
+    wrong = [c for c in counts if getattr(model, c) != getattr(mesh_model, c)]
+    if wrong:
+        raise ConfigError(
+            f"MjRenderer requires mesh_model with the same {', '.join(wrong)} as model, got "
+            + ", ".join(f"{c} {getattr(mesh_model, c)} (model: {getattr(model, c)})" for c in wrong)
+            + "; compile mesh_model from the same description"
+        )
+    np.copyto(mesh_model.tex_data, model.tex_data)
+    for name in ("extent", "center", "meansize", "meanmass", "meaninertia"):
+        setattr(mesh_model.stat, name, getattr(model.stat, name))
+    return mesh_model
+
+
 class MjRenderer:
     """An offscreen renderer of one ``mujoco.MjModel`` at ``(height, width)`` and a quality.
 
     ``render(data, camera)`` returns a fresh ``(H, W, 3)`` uint8 frame. The quality settings live
     in the model's ``vis.quality`` (read when the GL context is made), so they are applied here,
     before the context exists; the model's own values are restored right after.
+
+    ``mesh_model`` (optional): a model compiled from the same description whose meshes have fewer
+    faces (a level of detail, e.g. :mod:`stable_worldmodel.envs.ogbench.meshes`), with its mesh
+    vertices in ``model``'s mesh frames. Its meshes are the ones uploaded to the GL context; the
+    scene (poses, colours, lights, cameras) still comes from ``model`` and ``data``, and ``model``'s
+    textures are copied into it first (factors may have changed them). ConfigError when its
+    geoms, meshes or textures do not match ``model``'s.
     """
 
-    def __init__(self, model, height: int, width: int, quality: str = "medium"):
+    def __init__(self, model, height: int, width: int, quality: str = "medium", mesh_model=None):
         import mujoco
 
         self.quality = check_render_quality("MjRenderer", quality)
         self.height, self.width = int(height), int(width)
-        vis = model.vis
+        self._model = model
+        gl_model = model if mesh_model is None else _matching_mesh_model(model, mesh_model)
+        vis = gl_model.vis
         saved = (vis.global_.offwidth, vis.global_.offheight, vis.quality.shadowsize, vis.quality.offsamples)
         vis.global_.offwidth = max(vis.global_.offwidth, self.width)
         vis.global_.offheight = max(vis.global_.offheight, self.height)
@@ -135,10 +163,13 @@ class MjRenderer:
         elif quality == "low":
             vis.quality.offsamples = 0
         try:
-            self._renderer = mujoco.Renderer(model, self.height, self.width)
+            self._renderer = mujoco.Renderer(gl_model, self.height, self.width)
         finally:
             vis.global_.offwidth, vis.global_.offheight, vis.quality.shadowsize, vis.quality.offsamples = saved
         self._shadows = quality != "low"
+        self._option = mujoco.MjvOption()
+        self._camera = mujoco.MjvCamera()
+        self._camera_ids: dict[str, int] = {}
         _LIVE.add(self)
         if not _AT_EXIT:
             atexit.register(_close_live_renderers)
@@ -151,13 +182,35 @@ class MjRenderer:
         r = self._renderer
         if r is None:
             raise RuntimeError("MjRenderer.render called after close()")
-        if scene_option is None:
-            r.update_scene(data, camera=camera)
+        cam = self._camera
+        cam_id = self._camera_id(camera)
+        if cam_id == -1:
+            cam.type = mujoco.mjtCamera.mjCAMERA_FREE
+            mujoco.mjv_defaultFreeCamera(self._model, cam)
         else:
-            r.update_scene(data, camera=camera, scene_option=scene_option)
+            cam.type, cam.fixedcamid = mujoco.mjtCamera.mjCAMERA_FIXED, cam_id
+        option = self._option if scene_option is None else scene_option
+        # the scene from the physics model (not the renderer's, which may be mesh_model)
+        mujoco.mjv_updateScene(self._model, data, option, None, cam, mujoco.mjtCatBit.mjCAT_ALL.value, r.scene)
         if not self._shadows:
             r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
         return r.render()
+
+    def _camera_id(self, camera: int | str) -> int:
+        if isinstance(camera, str):
+            if camera not in self._camera_ids:
+                import mujoco
+
+                cam_id = mujoco.mj_name2id(self._model, mujoco.mjtObj.mjOBJ_CAMERA.value, camera)
+                if cam_id == -1:
+                    names = [self._model.camera(i).name for i in range(self._model.ncam)]
+                    raise ConfigError(f"MjRenderer requires a camera of the model, got {camera!r}.{did_you_mean(camera, names)}")
+                self._camera_ids[camera] = cam_id
+            return self._camera_ids[camera]
+        cam_id = int(camera)
+        if not -1 <= cam_id < self._model.ncam:
+            raise ConfigError(f"MjRenderer requires a camera id in [-1, {self._model.ncam}), got {camera!r}")
+        return cam_id
 
     @property
     def scene(self):

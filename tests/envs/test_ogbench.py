@@ -305,3 +305,64 @@ def test_an_expert_cube_dataset_trains_lewm(tmp_path, monkeypatch):
     losses = [r["train/loss"] for r in result.history if "train/loss" in r]
     assert result.steps == 40 and np.isfinite(losses).all()
     assert np.mean(losses[-2:]) < 0.8 * np.mean(losses[:2]), losses
+
+
+def _arm_mesh(model, name="ur5e/upperarm_3"):
+    i = model.mesh(name).id
+    v0, f0 = model.mesh_vertadr[i], model.mesh_faceadr[i]
+    return model.mesh_vert[v0 : v0 + model.mesh_vertnum[i]], model.mesh_face[f0 : f0 + model.mesh_facenum[i]]
+
+
+def test_ogbench_decimated_meshes_are_cached_on_disk_and_reused(cube, tmp_path, monkeypatch):
+    from stable_worldmodel.envs.ogbench import manip, meshes
+
+    cube.reset(seed=0)
+    model = manip._MODELS[cube._model_key()]
+    verts, faces = _arm_mesh(model)
+    small_v, small_f = meshes.decimate(verts, faces, 0.1)
+    assert len(small_f) <= 0.12 * len(faces) and small_v.shape[1] == 3 and small_f.max() < len(small_v)
+    assert len(list((tmp_path / "stablewm_home" / "meshes").glob("*.npz"))) == 1  # $STABLEWM_HOME (conftest)
+    monkeypatch.setattr(meshes, "_simplify", lambda *a: pytest.fail("decimated again instead of reading the cache"))
+    again_v, again_f = meshes.decimate(verts, faces, 0.1)
+    np.testing.assert_array_equal(again_v, small_v)
+    np.testing.assert_array_equal(again_f, small_f)
+    with pytest.raises(pytest.fail.Exception):  # another ratio is another cache entry
+        meshes.decimate(verts, faces, 0.2)
+
+
+def test_ogbench_decimated_arm_draws_the_same_64px_frame(cube):
+    from stable_worldmodel.envs.mujoco_render import MjRenderer
+
+    cube.reset(seed=3)
+    cube.step(np.array([0.5, -0.5, -0.5, 0.3, 1.0], np.float32))
+    light = cube._mesh_model()
+    assert light is not None and light.mesh_facenum.sum() < 0.3 * cube._model.mesh_facenum.sum()
+    frames = []
+    for mesh_model in (None, light):
+        r = MjRenderer(cube._model, 64, 64, "medium", mesh_model=mesh_model)
+        frames.append(r.render(cube._data, "front_pixels").astype(np.int64))
+        r.close()
+    assert np.abs(frames[0] - frames[1]).mean() < 2.0  # measured ~1/255; a misplaced mesh gives > 5
+
+
+def test_ogbench_high_quality_keeps_exact_meshes_and_decimation_errors_are_typed(cube):
+    from stable_worldmodel.envs.mujoco_render import MjRenderer
+    from stable_worldmodel.envs.ogbench import meshes
+    from stable_worldmodel.envs.ogbench.manip import mujoco
+
+    high = CubeEnv(render_quality="high")
+    assert high._mesh_model() is None and meshes.MESH_DETAIL["high"] is None
+    high.close()
+    for bad in (0, -0.5, 1.5, "x", None, True):
+        with pytest.raises(ConfigError, match="ratio in \\(0, 1\\]"):
+            meshes.check_ratio(bad)
+    with pytest.raises(ConfigError, match="vertices \\(V, 3\\) and faces \\(F, 3\\)"):
+        meshes.decimate(np.zeros((4, 2)), np.zeros((2, 3), np.int32), 0.5)
+    cube.reset(seed=0)
+    other = mujoco.MjModel.from_xml_string("<mujoco><worldbody><geom size='1'/></worldbody></mujoco>")
+    with pytest.raises(ConfigError, match="mesh_model with the same ngeom"):
+        MjRenderer(cube._model, 16, 16, "medium", mesh_model=other)
+    r = MjRenderer(cube._model, 16, 16, "low")
+    with pytest.raises(ConfigError, match="camera of the model, got 'front_pixel'. Did you mean .*'front_pixels'"):
+        r.render(cube._data, "front_pixel")
+    r.close()

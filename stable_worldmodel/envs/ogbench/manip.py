@@ -11,7 +11,9 @@
 - **Rendering** goes through :class:`~stable_worldmodel.envs.mujoco_render.MjRenderer`,
   created on the first ``render()`` (never in ``__init__``, so envs built in forked workers are
   safe), rebuilt when the size or the model changes (a new floor texture is uploaded to the live
-  context), freed by :meth:`close`.
+  context), freed by :meth:`close`. Below ``render_quality="high"`` it draws the arm's decimated
+  meshes (:mod:`.meshes`: ``"medium"`` keeps 10 % of the faces of each large mesh, ``"low"`` 5 %,
+  physics untouched); ``"high"`` draws the exact meshes, upstream's picture.
 - **Goal**: the goal scene is built, settled for 2 zero-action steps and captured once per reset
   (``info["goal"]`` image, ``goal_state``, ``goal_proprio``, upstream's ``target`` = its
   observation), then the start scene is set.
@@ -35,7 +37,7 @@ from ..._optional import require
 from ...errors import ConfigError, unknown_name
 from ..base import DatasetResetMixin, check_render_size, check_variation_option, flatten_values
 from ..mujoco_render import MjRenderer, check_render_quality, setup_gl
-from . import infokeys
+from . import infokeys, meshes
 from .factors import RENDER_CAMERA, CubeSizes, VisualFactors, tint
 
 setup_gl()  # before mujoco is imported
@@ -50,6 +52,7 @@ PROPRIO_DIM = 19
 SUCCESS_DISTANCE = 0.04  # OGBench's task rule: every cube within 4 cm of its target
 SETTLE_STEPS = 2
 _MODELS: dict[tuple, Any] = {}  # compiled models, one per configuration (process-wide)
+_MESH_MODELS: dict[tuple, Any] = {}  # their decimated twins for drawing, per configuration and ratio
 
 
 def proprio_vector(ob_info: Mapping[str, np.ndarray]) -> np.ndarray:
@@ -129,8 +132,7 @@ class ManipMixin(DatasetResetMixin):
     # -- compilation ----------------------------------------------------------------------------
     def compile_model_and_data(self) -> None:
         """OGBench's compilation, from a per-process cache of compiled models."""
-        key = (type(self).__module__, type(self).__qualname__, self._env_type, self._ob_type,
-               self._pixel_transparent_arm)
+        key = self._model_key()
         if key not in _MODELS:
             mj = self._mjcf_model
             _MODELS[key] = mujoco.MjModel.from_xml_string(mjcf_utils.to_string(mj), mjcf_utils.get_assets(mj))
@@ -141,6 +143,23 @@ class ManipMixin(DatasetResetMixin):
         self._close_renderer()
         self.post_compilation()
         self._dirty = False
+
+    def _model_key(self) -> tuple:
+        return (type(self).__module__, type(self).__qualname__, self._env_type, self._ob_type,
+                self._pixel_transparent_arm)
+
+    def _mesh_model(self):
+        """The model whose (decimated) meshes the renderer draws, or None for the exact ones
+        (``render_quality="high"``, or fast-simplification missing): :mod:`.meshes`."""
+        ratio = meshes.MESH_DETAIL[self.render_quality]
+        if ratio is None or not meshes.available():
+            return None
+        key = (*self._model_key(), ratio)
+        if key not in _MESH_MODELS:
+            mj = self._mjcf_model
+            _MESH_MODELS[key] = meshes.render_mesh_model(
+                _MODELS[self._model_key()], mjcf_utils.to_string(mj), mjcf_utils.get_assets(mj), ratio)
+        return _MESH_MODELS[key]
 
     def post_compilation_objects(self) -> None:
         super().post_compilation_objects()
@@ -384,7 +403,8 @@ class ManipMixin(DatasetResetMixin):
         if self._model is None:
             raise ConfigError(f"{type(self).__name__} requires reset() before rendering")
         self._close_renderer()
-        self._mjr = MjRenderer(self._model, self._render_height, self._render_width, self.render_quality)
+        self._mjr = MjRenderer(self._model, self._render_height, self._render_width, self.render_quality,
+                               mesh_model=self._mesh_model())
 
     def render(self, camera: str | None = None) -> np.ndarray:
         """The ``(H, W, 3)`` uint8 frame from ``camera`` (default ``front_pixels``, as upstream)."""
