@@ -133,6 +133,11 @@ def train(
         cfg.prepare_model(net)
     features = None
     frozen = getattr(net, "frozen_encoder", None)
+    if callable(frozen):  # an encoder with statistics of the data (standardization) learns them here, once
+        from .features import fit_frozen_encoder
+
+        if fit_frozen_encoder(frozen().to(dev), data.dataset, data.train_episodes, cfg, dev):
+            logger.info("Frozen encoder fitted to the training frames of %s", dataset)
     if feature_cache and callable(frozen) and not data.goals:
         from .features import load_or_compute_features
 

@@ -28,7 +28,7 @@ from ..wm.preprocess import preprocess_images
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["FeatureCache", "feature_fingerprint", "load_or_compute_features"]
+__all__ = ["FeatureCache", "feature_fingerprint", "fit_frozen_encoder", "load_or_compute_features"]
 
 CHUNK_ROWS = 256  # frames encoded per forward pass while filling the cache
 
@@ -46,6 +46,29 @@ class FeatureCache:
     def describe(self) -> str:
         verb = "computed" if self.computed else "loaded from the cache"
         return f"frozen-encoder features of {len(self.features)} frames {verb} in {self.seconds:.1f} s ({self.path})"
+
+
+def fit_frozen_encoder(encoder: torch.nn.Module, dataset: Any, episodes: Any, cfg: Any, device: torch.device,
+                       max_frames: int = 4096) -> bool:
+    """Fit a frozen encoder that learns fixed statistics from data (one with ``fit_to_frames``,
+    e.g. :class:`~stable_worldmodel.wm.prejepa.module.BlurPatchEncoder`; also inside an
+    ``EvalOnly`` wrapper) on up to ``max_frames`` frames of ``episodes``, evenly spaced and
+    preprocessed as for training. Returns whether there was anything to fit. The fitted buffers
+    are part of the encoder's state dict, so the feature cache's fingerprint follows them."""
+    target = getattr(encoder, "backbone", encoder)
+    fit = getattr(target, "fit_to_frames", None)
+    if not callable(fit):
+        return False
+    eps = np.asarray(episodes, dtype=np.int64)
+    lengths, offsets = np.asarray(dataset.lengths)[eps], np.asarray(dataset.offsets)[eps]
+    rows = np.concatenate([np.arange(o, o + n) for o, n in zip(offsets, lengths)]) if len(eps) else np.zeros(0, np.int64)
+    if len(rows) < 2:
+        raise ValueError(f"fitting the frozen encoder requires at least 2 training frames, got {len(rows)}")
+    rows = rows[np.unique(np.linspace(0, len(rows) - 1, min(len(rows), max_frames)).astype(np.int64))]
+    frames = np.concatenate([dataset._read(keys.PIXELS, int(r), int(r) + 1) for r in rows])  # (n, H, W, C)
+    images = torch.from_numpy(np.ascontiguousarray(frames)).permute(0, 3, 1, 2).unsqueeze(1).to(device)
+    fit(preprocess_images(images, cfg.image_mean, cfg.image_std, cfg.image_size)[:, 0])
+    return True
 
 
 def feature_fingerprint(encoder: torch.nn.Module, cfg: Any, dataset_path: Path) -> str:

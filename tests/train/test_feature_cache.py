@@ -15,7 +15,7 @@ from stable_worldmodel.train.data import TrainData
 from stable_worldmodel.train.features import cache_file, feature_fingerprint, load_or_compute_features
 
 #: a tiny PreJEPA (frozen random CNN of 2x2 patches of 8 features, one predictor layer) at 16x16
-NET = dict(image_size=16, embed_dim=8, cnn_width=8, cnn_grid=2, depth=1, heads=2, dim_head=4, mlp_dim=16,
+NET = dict(backbone="cnn", image_size=16, embed_dim=8, cnn_width=8, cnn_grid=2, depth=1, heads=2, dim_head=4, mlp_dim=16,
            history_size=2, frameskip=1, warmup_steps=0, batch_size=4)
 
 
@@ -39,6 +39,14 @@ def test_second_run_reuses_the_features_of_the_first(toy, _stablewm_home):
     assert other.features.computed and other.features.path != first.features.path  # other random encoder
     off = train("prejepa", toy, steps=2, progress=False, name="d", val_every=0, seed=0, feature_cache=False, **NET)
     assert off.features is None
+    # the blur encoder (the tiny preset's) has no weights but statistics of the training split:
+    # the same split reuses the file, another split (seed) fits other statistics and gets its own
+    blur = {**NET, "backbone": "blur", "blur_pool": 2}
+    b0 = train("prejepa", toy, steps=2, progress=False, name="e", val_every=0, seed=0, **blur)
+    b0_again = train("prejepa", toy, steps=2, progress=False, name="f", val_every=0, seed=0, **blur)
+    b1 = train("prejepa", toy, steps=2, progress=False, name="g", val_every=0, seed=1, **blur)
+    assert b0.features.computed and not b0_again.features.computed and b0.features.path == b0_again.features.path
+    assert b1.features.computed and b1.features.path not in (b0.features.path, first.features.path)
 
 
 def test_cached_batches_equal_encoding_on_the_fly(toy):

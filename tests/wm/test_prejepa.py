@@ -18,7 +18,7 @@ from stable_worldmodel.errors import ConfigError, SpaceError, UnknownNameError
 
 A = ACTION_DIM
 #: a width-8 frozen patch CNN (2x2 = 4 patches of 8 features) and a one-layer predictor
-NET = dict(image_size=IMAGE, embed_dim=8, cnn_width=8, cnn_grid=2, depth=1, heads=2, dim_head=4, mlp_dim=16,
+NET = dict(backbone="cnn", image_size=IMAGE, embed_dim=8, cnn_width=8, cnn_grid=2, depth=1, heads=2, dim_head=4, mlp_dim=16,
            history_size=2, frameskip=1, action_emb_dim=4, proprio_emb_dim=4)
 P, DV, DP = 4, 8, 3  # patches, pixel features, proprio numbers
 #: a one-layer DINOv2 of width 8 with patch 8 (4 patches at 16x16)
@@ -326,6 +326,97 @@ def test_random_backbones_of_each_family():
     resnet = create_backbone("resnet_50", pretrained=False, hidden_sizes=[8, 8, 8, 8], embedding_size=8, depths=[1, 1, 1, 1])
     assert isinstance(resnet.classifier[1], nn.LayerNorm) and resnet(x).logits.shape == (2, 8)
     assert create_backbone("cnn", image_size=IMAGE, width=8, hidden_size=8, grid=2)(x).last_hidden_state.shape == (2, 5, 8)
+
+
+def test_blur_backbone_tokens_are_the_blurred_pooled_picture():
+    from stable_worldmodel.wm.backbones import create_backbone
+
+    enc = create_backbone("blur", image_size=IMAGE, sigma=0.5, pool=2, grid=2)
+    assert not list(enc.parameters())  # nothing to train; standardization is the identity until fitted
+    assert torch.equal(enc.mean, torch.zeros_like(enc.mean)) and torch.equal(enc.scale, torch.ones_like(enc.scale))
+    x = images(2, 1)[:, 0]
+    out = enc(x).last_hidden_state
+    assert out.shape == (2, 1 + 4, 3 * 4 * 4)  # 16 px pooled by 2 = 8 x 8, cut in 2 x 2 cells of 3 x 4 x 4
+    assert_close(out[:, 0], out[:, 1:].mean(1))
+    # token (row 0, col 1) is the top-right 4 x 4 cell of the pooled picture, channel-major
+    flat = torch.zeros(1, 3, IMAGE, IMAGE)
+    flat[0, 1, :8, 8:] = 1.0  # green in the top-right quarter only
+    tokens = create_backbone("blur", image_size=IMAGE, sigma=1e-3, pool=2, grid=2)(flat).last_hidden_state[0, 1:]
+    assert torch.count_nonzero(tokens[[0, 2, 3]]) == 0
+    assert torch.equal(tokens[1].reshape(3, 4, 4)[1], torch.ones(4, 4)) and torch.count_nonzero(tokens[1].reshape(3, 4, 4)[[0, 2]]) == 0
+
+
+def test_blur_features_grow_with_the_distance_between_dots():
+    """What the tiny preset needs: the farther the dot from the goal's, the larger the cost (up
+    to about 4 sigma, where the blurred dots stop overlapping and the cost levels off)."""
+    from stable_worldmodel.wm.backbones import create_backbone
+
+    enc = create_backbone("blur", image_size=32, pool=4, grid=2)  # sigma 32 / 8 = 4 px
+
+    def dot(col: int) -> torch.Tensor:
+        img = torch.zeros(1, 3, 32, 32)
+        img[0, :, 14:18, col : col + 3] = 1.0
+        return enc(img).last_hidden_state[0, 1:]
+
+    goal = dot(4)
+    costs = [float((dot(c) - goal).pow(2).mean()) for c in range(4, 21, 2)]
+    assert all(a < b for a, b in zip(costs, costs[1:])), costs
+
+
+def test_blur_backbone_standardizes_each_value_once_fitted():
+    from stable_worldmodel.wm.backbones import create_backbone
+
+    enc = create_backbone("blur", image_size=IMAGE, pool=2, grid=2)
+    frames = images(12, 1)[:, 0]
+    raw = enc(frames).last_hidden_state[:, 1:]
+    enc.fit_to_frames(frames)
+    assert set(enc.state_dict()) == {"mean", "scale"}  # saved with the model, so planning sees the same features
+    fitted = enc(frames).last_hidden_state[:, 1:]
+    assert_close(fitted.mean(0), torch.zeros_like(fitted[0]), atol=1e-5, rtol=0)
+    assert_close(fitted.std(0), torch.ones_like(fitted[0]), atol=1e-4, rtol=0)
+    assert_close(fitted * enc.scale + enc.mean, raw, atol=1e-6, rtol=0)
+    static = torch.zeros(4, 3, IMAGE, IMAGE)
+    static[1:, 0, :4, :4] = 1.0  # a value no frame changes gets the floor, not a division by zero
+    enc.fit_to_frames(static)
+    assert torch.isfinite(enc(static).last_hidden_state).all()
+    with pytest.raises(SpaceError, match="at least 2 frames"):
+        enc.fit_to_frames(frames[:1])
+
+
+def test_training_fits_the_blur_encoder_to_the_training_split(toy, _stablewm_home):
+    from stable_worldmodel.train import train
+
+    net = {**NET, "backbone": "blur", "blur_pool": 2}
+    result = train("prejepa", toy, steps=2, progress=False, name="pj-blur", val_every=0, seed=0, **net)
+    loaded = wm.load_pretrained("pj-blur")
+    enc = loaded.frozen_encoder().backbone
+    assert not torch.equal(enc.scale, torch.ones_like(enc.scale)) and result.features.computed
+    from stable_worldmodel.data import HDF5Dataset
+
+    protocol = json.loads((result.folder / "protocol.json").read_text())
+    data = HDF5Dataset(toy)
+    rows = np.concatenate([np.arange(o, o + n) for o, n in zip(np.asarray(data.offsets)[protocol["train_episodes"]],
+                                                                np.asarray(data.lengths)[protocol["train_episodes"]])])
+    pixels = torch.from_numpy(np.concatenate([data._read("pixels", int(r), int(r) + 1) for r in rows])).permute(0, 3, 1, 2)
+    with torch.no_grad():
+        feats = loaded.encode_pixels(((pixels.float() / 255 - 0.5) / 0.5)[:, None])[:, 0]
+    assert_close(feats.mean(0), torch.zeros_like(feats[0]), atol=2e-3, rtol=0)  # standardized over the training frames
+    assert 0.9 < float(feats.std(0).max()) < 1.1
+
+
+def test_tiny_preset_uses_the_blur_encoder():
+    cfg = wm.get_config("prejepa", "tiny")
+    assert (cfg.backbone, cfg.num_patches, cfg.encoder_dim) == ("blur", 4, 48)
+    model = wm.instantiate(cfg.target_tree(2)).eval()
+    with torch.no_grad():
+        emb = model.encode({keys.PIXELS: torch.rand(1, 1, 3, 64, 64), keys.ACTION: torch.zeros(1, 1, 10)})
+    assert emb["pixels_emb"].shape == (1, 1, 4, 48)
+    with pytest.raises(ConfigError, match="divisible by blur_pool \\* cnn_grid"):
+        wm.get_config("prejepa", "tiny", image_size=60)
+    with pytest.raises(ConfigError, match="blur_sigma >= 0"):
+        wm.get_config("prejepa", "tiny", blur_sigma=-1.0)
+    with pytest.raises(ConfigError, match="pretrained=False with backbone 'blur'"):
+        wm.get_config("prejepa", "tiny", pretrained=True)
 
 
 def test_missing_weights_name_where_to_put_them():

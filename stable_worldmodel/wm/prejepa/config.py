@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from ...errors import ConfigError
-from ..backbones import BACKBONES, backbone_spec
+from ..backbones import BACKBONES, LOCAL_FAMILIES, backbone_spec
 from ..config import IMAGENET_MEAN, IMAGENET_STD, JEPAConfig
 
 __all__ = ["PreJEPAConfig"]
@@ -23,16 +23,21 @@ class PreJEPAConfig(JEPAConfig):
     ``pretrained`` (load its weights from ``backbone_path`` or ``$STABLEWM_HOME/backbones/``;
     never downloaded), ``backbone_overrides`` (transformers config fields of a randomly
     initialised backbone). With ``backbone="cnn"``: ``embed_dim`` is the token width,
-    ``cnn_width`` the first conv's channels and ``cnn_grid`` the side of the patch grid.
+    ``cnn_width`` the first conv's channels and ``cnn_grid`` the side of the patch grid. With
+    ``backbone="blur"`` (:class:`~stable_worldmodel.wm.prejepa.module.BlurPatchEncoder`): the
+    image blurred by ``blur_sigma`` pixels (0: ``image_size / 8``), pooled by ``blur_pool``, in
+    ``cnn_grid`` x ``cnn_grid`` tokens (``embed_dim`` unused: the width follows).
     Extra inputs: ``action_emb_dim`` (width of the action embedding), ``proprio_dim``
     (numbers of the dataset's ``proprio`` column; 0: pixels only) and ``proprio_emb_dim``.
     Predictor: ``depth``, ``heads``, ``dim_head``, ``mlp_dim``, ``dropout`` over
     ``history_size`` frames. The inherited ``encoder``, ``vit_size``, ``vit_overrides``,
     ``patch_size`` and ``projector_hidden`` are not used.
 
-    Presets: ``tiny`` (64x64, a frozen random patch CNN with 4 tokens of 32 features, one
-    context frame, a 2-layer predictor: a CPU trains it in seconds from cached features and
-    plans in ~5 s per CEM plan of 10 envs; 16 tokens and 3 frames plan 9x slower), ``small`` (pretrained DINOv2 ViT-S/14 at
+    Presets: ``tiny`` (64x64, the ``blur`` encoder with 4 tokens of 48 values (the 8x8 pooled
+    picture), one context frame, a 2-layer predictor: a CPU trains it in seconds from cached
+    features and plans in ~5 s per CEM plan of 10 envs; 16 tokens and 3 frames plan 9x slower;
+    a randomly initialised CNN or ViT there scores the agent's steps towards the goal no better
+    than chance), ``small`` (pretrained DINOv2 ViT-S/14 at
     112x112, 64 patches, a 4-layer predictor: one GPU) and ``paper`` (upstream's DINO-WM
     recipe: pretrained DINOv2 ViT-S/14 at 224x224, 256 patches, predictor depth 6 with 16
     heads of 64 and MLP 2048, action and proprio embeddings of 10, frameskip 5, history 3).
@@ -42,7 +47,7 @@ class PreJEPAConfig(JEPAConfig):
     target: ClassVar[str] = f"{_P}.prejepa.PreJEPA"
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "tiny": {
-            "backbone": "cnn", "pretrained": False, "image_size": 64, "embed_dim": 32, "cnn_width": 16, "cnn_grid": 2,
+            "backbone": "blur", "pretrained": False, "image_size": 64, "blur_pool": 8, "cnn_grid": 2,
             "depth": 2, "heads": 4, "dim_head": 16, "mlp_dim": 128, "batch_size": 32, "lr": 1e-3, "warmup_steps": 50,
             "steps": 1000, "history_size": 1,
         },
@@ -63,6 +68,8 @@ class PreJEPAConfig(JEPAConfig):
     pretrained: bool = False
     backbone_overrides: dict[str, Any] = field(default_factory=dict)
     cnn_grid: int = 4
+    blur_sigma: float = 0.0
+    blur_pool: int = 8
     action_emb_dim: int = 10
     proprio_dim: int = 0
     proprio_emb_dim: int = 10
@@ -74,17 +81,23 @@ class PreJEPAConfig(JEPAConfig):
         super().__post_init__()
         name = type(self).__name__
         backbone_spec(self.backbone)  # an unknown name gets the "did you mean" error
-        for key in ("cnn_grid", "action_emb_dim", "proprio_emb_dim"):
+        for key in ("cnn_grid", "blur_pool", "action_emb_dim", "proprio_emb_dim"):
             value = getattr(self, key)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ConfigError(f"{name} requires {key} to be a positive int, got {value!r}")
+        if isinstance(self.blur_sigma, bool) or not isinstance(self.blur_sigma, (int, float)) or self.blur_sigma < 0:
+            raise ConfigError(f"{name} requires blur_sigma >= 0 (pixels; 0: image_size / 8), got {self.blur_sigma!r}")
         if isinstance(self.proprio_dim, bool) or not isinstance(self.proprio_dim, int) or self.proprio_dim < 0:
             raise ConfigError(f"{name} requires proprio_dim to be an int >= 0 (0: no proprio input), got {self.proprio_dim!r}")
         if not isinstance(self.pretrained, bool):
             raise ConfigError(f"{name} requires pretrained to be a bool, got {self.pretrained!r}")
-        if self.backbone == "cnn" and self.pretrained:
-            raise ConfigError(f"{name} requires pretrained=False with backbone 'cnn' (it has no pretrained weights), got True")
-        if self.backbone != "cnn" and self.image_size < self.backbone_patch:
+        local = backbone_spec(self.backbone).family in LOCAL_FAMILIES
+        if local and self.pretrained:
+            raise ConfigError(f"{name} requires pretrained=False with backbone {self.backbone!r} (it has no pretrained weights), got True")
+        if self.backbone == "blur" and self.image_size % (self.blur_pool * self.cnn_grid):
+            raise ConfigError(f"{name} requires image_size divisible by blur_pool * cnn_grid with backbone 'blur', got "
+                              f"image_size={self.image_size}, blur_pool={self.blur_pool}, cnn_grid={self.cnn_grid}")
+        if not local and self.image_size < self.backbone_patch:
             raise ConfigError(f"{name} requires image_size >= the backbone's patch size {self.backbone_patch}, got {self.image_size}")
 
     # -- sizes --------------------------------------------------------------------------------
@@ -98,6 +111,8 @@ class PreJEPAConfig(JEPAConfig):
         spec = backbone_spec(self.backbone)
         if spec.family == "cnn":
             return self.embed_dim
+        if spec.family == "blur":
+            return 3 * (self.image_size // (self.blur_pool * self.cnn_grid)) ** 2
         if spec.family == "resnet" and "hidden_sizes" in self.backbone_overrides:
             return int(self.backbone_overrides["hidden_sizes"][-1])
         return int(self.backbone_overrides.get("hidden_size", spec.width))
@@ -106,7 +121,7 @@ class PreJEPAConfig(JEPAConfig):
     def num_patches(self) -> int:
         """Tokens per frame ``P``: the CNN's grid, one for a ResNet, (image_size // patch)**2 for a ViT."""
         spec = backbone_spec(self.backbone)
-        if spec.family == "cnn":
+        if spec.family in LOCAL_FAMILIES:
             return self.cnn_grid**2
         if spec.family == "resnet":
             return 1
@@ -116,6 +131,9 @@ class PreJEPAConfig(JEPAConfig):
     def encoder_tree(self) -> dict[str, Any]:
         if self.backbone == "cnn":
             backbone = {"name": "cnn", "image_size": self.image_size, "width": self.cnn_width, "hidden_size": self.embed_dim,
+                        "grid": self.cnn_grid}
+        elif self.backbone == "blur":
+            backbone = {"name": "blur", "image_size": self.image_size, "sigma": float(self.blur_sigma), "pool": self.blur_pool,
                         "grid": self.cnn_grid}
         else:
             backbone = {"name": self.backbone, "path": self.backbone_path, "pretrained": self.pretrained, **self.backbone_overrides}

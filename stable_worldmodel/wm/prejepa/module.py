@@ -5,8 +5,9 @@
   attention is causal across frames (a token sees every patch of its own and earlier frames).
 - :class:`Embedder`: a per-frame linear map (a 1-D conv) of actions or proprioception,
   ``(B, T, in_chans) -> (B, T, emb_dim)``.
-- :class:`PatchConvEncoder`: the small CNN of the CPU presets (``create_backbone("cnn")``),
-  returning a ViT-like ``last_hidden_state (N, 1 + P, D)``.
+- :class:`PatchConvEncoder`: a small CNN (``create_backbone("cnn")``), and
+  :class:`BlurPatchEncoder`: the blurred picture as patch tokens, without weights (``create_backbone("blur")``,
+  the ``tiny`` preset's), both returning a ViT-like ``last_hidden_state (N, 1 + P, D)``.
 
 Shapes: ``B`` batch, ``T`` frames, ``P`` patches per frame, ``D`` token width.
 """
@@ -135,6 +136,14 @@ class CausalPredictor(nn.Module):
         return self.transformer(self.dropout(x + self.pos_embedding[:, :n]))
 
 
+def _check_images(owner: str, pixels: torch.Tensor, config: Any) -> None:
+    """SpaceError unless ``pixels`` is ``(N, config.num_channels, config.image_size, config.image_size)``."""
+    size, c = config.image_size, config.num_channels
+    if pixels.ndim != 4 or pixels.shape[1] != c or tuple(pixels.shape[-2:]) != (size, size):
+        raise SpaceError(f"{owner} requires images (N, {c}, {size}, {size}), got {tuple(pixels.shape)}; "
+                         "resize them to the model's image_size")
+
+
 class PatchConvEncoder(nn.Module):
     """Small strided CNN with patch tokens: ``(N, in_channels, image_size, image_size) ->
     last_hidden_state (N, 1 + grid**2, hidden_size)``; token 0 is the mean of the patch tokens
@@ -166,11 +175,74 @@ class PatchConvEncoder(nn.Module):
         self.head = nn.Conv2d(channels, hidden_size, 1)
 
     def forward(self, pixels: torch.Tensor, interpolate_pos_encoding: bool = False, **kwargs: Any) -> EncoderOutput:
-        size, c = self.config.image_size, self.config.num_channels
-        if pixels.ndim != 4 or pixels.shape[1] != c or tuple(pixels.shape[-2:]) != (size, size):
-            raise SpaceError(
-                f"PatchConvEncoder requires images (N, {c}, {size}, {size}), got {tuple(pixels.shape)}; "
-                "resize them to the model's image_size"
-            )
+        _check_images("PatchConvEncoder", pixels, self.config)
         tokens = self.head(self.convs(pixels.to(self.head.weight.dtype))).flatten(2).transpose(1, 2)  # (N, P, D)
         return EncoderOutput(torch.cat([tokens.mean(1, keepdim=True), tokens], dim=1))
+
+
+class BlurPatchEncoder(nn.Module):
+    """A fixed (weightless) patch encoder: the picture itself, blurred. ``(N, in_channels,
+    image_size, image_size) -> last_hidden_state (N, 1 + grid**2, in_channels * (image_size //
+    (pool * grid))**2)``; token 0 is the mean of the patch tokens.
+
+    The image is blurred with a Gaussian of ``sigma`` pixels (0: ``image_size / 8``), average-pooled
+    by ``pool`` and cut into ``grid`` x ``grid`` cells, each cell's values a token. Distances between
+    such features grow smoothly with how far apart small objects are, which a randomly
+    initialised CNN or ViT does not give (their feature distance is about as likely to fall as to
+    rise when the agent steps towards the goal): it is the encoder of the ``tiny`` preset, where
+    no pretrained DINOv2 can be had.
+
+    :meth:`fit_to_frames` standardizes each token value by its mean and spread over training
+    frames (buffers ``mean`` and ``scale``, saved with the model; identity until fitted): a
+    small agent moves a blurred picture by about 1e-3 while the static scene spans 1, and a
+    predictor that must reproduce both learns only the scene (measured: the same loss with the
+    true and with shuffled actions); standardized, the agent's moves are of order 1.
+    """
+
+    def __init__(self, image_size: int = 64, in_channels: int = 3, sigma: float = 0.0, pool: int = 8, grid: int = 2):
+        super().__init__()
+        for key, value in (("image_size", image_size), ("in_channels", in_channels), ("pool", pool), ("grid", grid)):
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ConfigError(f"BlurPatchEncoder requires {key} to be a positive int, got {value!r}")
+        if isinstance(sigma, bool) or not isinstance(sigma, (int, float)) or sigma < 0:
+            raise ConfigError(f"BlurPatchEncoder requires sigma >= 0 (pixels; 0: image_size / 8), got {sigma!r}")
+        if image_size % (pool * grid):
+            raise ConfigError(f"BlurPatchEncoder requires image_size divisible by pool * grid, got image_size={image_size}, "
+                              f"pool={pool}, grid={grid}")
+        sigma = float(sigma) or image_size / 8
+        radius = max(1, int(round(3 * sigma)))
+        taps = torch.exp(-torch.arange(-radius, radius + 1, dtype=torch.float32) ** 2 / (2 * sigma**2))
+        self.register_buffer("taps", taps / taps.sum(), persistent=False)  # a function of the config: not in state_dict
+        cell = image_size // (pool * grid)
+        self.register_buffer("mean", torch.zeros(grid * grid, in_channels * cell * cell))
+        self.register_buffer("scale", torch.ones(grid * grid, in_channels * cell * cell))
+        self.config = SimpleNamespace(image_size=image_size, num_channels=in_channels, hidden_size=in_channels * cell * cell,
+                                      grid=grid, pool=pool, sigma=sigma)
+
+    def forward(self, pixels: torch.Tensor, interpolate_pos_encoding: bool = False, **kwargs: Any) -> EncoderOutput:
+        _check_images("BlurPatchEncoder", pixels, self.config)
+        tokens = (self._tokens(pixels) - self.mean) / self.scale
+        return EncoderOutput(torch.cat([tokens.mean(1, keepdim=True), tokens], dim=1))
+
+    @torch.no_grad()
+    def fit_to_frames(self, pixels: torch.Tensor, floor: float = 1e-3) -> None:
+        """Set ``mean`` and ``scale`` from preprocessed frames ``(N, C, H, W)`` (N >= 2): the
+        standard deviation of each value, at least ``floor`` x the largest one (values the
+        frames never change stay near 0 instead of blowing up)."""
+        if pixels.ndim != 4 or len(pixels) < 2:
+            raise SpaceError(f"BlurPatchEncoder.fit_to_frames requires at least 2 frames (N, C, H, W), got {tuple(pixels.shape)}")
+        tokens = torch.cat([self._tokens(pixels[i : i + 512]) for i in range(0, len(pixels), 512)])
+        std = tokens.std(0)
+        self.mean.copy_(tokens.mean(0))
+        self.scale.copy_(std.clamp_min(floor * float(std.max().clamp_min(1e-12))))
+
+    def _tokens(self, pixels: torch.Tensor) -> torch.Tensor:
+        """Unstandardized patch tokens ``(N, grid**2, D)``."""
+        c, grid = self.config.num_channels, self.config.grid
+        x, k, r = pixels.to(self.taps.dtype), self.taps, len(self.taps) // 2
+        x = F.conv2d(F.pad(x, (r, r, 0, 0), mode="replicate"), k.view(1, 1, 1, -1).expand(c, 1, 1, -1), groups=c)
+        x = F.conv2d(F.pad(x, (0, 0, r, r), mode="replicate"), k.view(1, 1, -1, 1).expand(c, 1, -1, 1), groups=c)
+        x = F.avg_pool2d(x, self.config.pool)  # (N, C, S, S)
+        n, cell = x.shape[0], x.shape[-1] // grid
+        return x.reshape(n, c, grid, cell, grid, cell).permute(0, 2, 4, 1, 3, 5).reshape(n, grid * grid, -1)
+
