@@ -1,7 +1,7 @@
 """Every model's tiny preset on one env, with the world-model issues' protocol: collect expert episodes, train,
 evaluate on the same seeds; prints a markdown table (training time, plan time, success and its 95% interval).
 
-Usage: python bench/bench_models_tworoom.py [--env swm/TwoRoom-v1] [--models lewm pldm prejepa gcbc]
+Usage: python bench/bench_models_tworoom.py [--env swm/TwoRoom-v1] [--models lewm pldm prejepa gcbc dreamer]
        [--episodes 300] [--eval-episodes 50] [--num-envs 10] [--seed 5000] [--steps N]
 Runs in a scratch $STABLEWM_HOME unless --keep; never asserts. On a 2-core CPU each model takes 3-8 minutes.
 """
@@ -63,7 +63,7 @@ def print_row(row: dict, flush: bool = False) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--env", default="swm/TwoRoom-v1")
-    parser.add_argument("--models", nargs="+", default=["lewm", "pldm", "prejepa", "gcbc"])
+    parser.add_argument("--models", nargs="+", default=["lewm", "pldm", "prejepa", "gcbc", "dreamer"])
     parser.add_argument("--episodes", type=int, default=300)
     parser.add_argument("--eval-episodes", type=int, default=50)
     parser.add_argument("--num-envs", type=int, default=10)
@@ -72,7 +72,8 @@ def main() -> None:
     parser.add_argument("--keep", action="store_true", help="use $STABLEWM_HOME instead of a scratch folder")
     args = parser.parse_args()
     print(f"{args.env}: {args.episodes} expert episodes, tiny presets, {args.eval_episodes} evaluation episodes "
-          f"(seeds {args.seed}..), {args.num_envs} envs, this machine")
+          f"(seeds {args.seed}..), {args.num_envs} envs, this machine; world models plan with PlanSettings() "
+          f"(CEM 300 x 30, horizon 5, subgoals 'auto': the training data's waypoints once an episode stalls)")
     print("| model | training | plan time per env step | success (95% CI) | collect + train + eval |")
     print("| --- | ---: | ---: | ---: | ---: |")
     if args.keep:
