@@ -156,8 +156,8 @@ class StallMonitor:
     Each :meth:`update` (one replan, ``steps_per_call`` env steps after the last) measures every
     env's latent distance to its goal. An env whose distance has not come ``tolerance`` below the
     distance of its last progress (at first: its starting distance) for ``patience`` env steps is
-    *stalled* from then on, until its goal changes or it
-    restarts (a new episode), when it starts over.
+    *stalled* from then on, until its goal changes or it restarts (a new episode), when it starts
+    over.
 
     Args:
         patience: env steps without progress before an env counts as stalled (>= 1).
