@@ -290,12 +290,16 @@ class _WaypointHook:
             emb = self.model.encode_pixels(info[keys.PIXELS].to(dev))  # (B, T, ...)
             goal = self.model.encode_pixels(info[keys.GOAL].to(dev))[:, -1]  # (B, ...)
             current, flat_goal = emb[:, -1].flatten(1), goal.flatten(1)
-            waypoint = self.graph.waypoints(current, flat_goal).reshape(goal.shape)
-            if self.monitor is not None:
+            if self.monitor is None:
+                waypoint = self.graph.waypoints(current, flat_goal).reshape(goal.shape)
+            else:  # the graph is searched only once some env has stalled
                 step = info.get(keys.STEP_IDX)
                 restarted = None if step is None else torch.as_tensor(step).reshape(len(goal), -1)[:, -1] == 0
-                on = self.monitor.update(current, flat_goal, restarted).to(dev).reshape(-1, *([1] * (goal.ndim - 1)))
-                waypoint = torch.where(on, waypoint, goal)
+                on = self.monitor.update(current, flat_goal, restarted)
+                waypoint = goal
+                if bool(on.any()):
+                    found = self.graph.waypoints(current, flat_goal).reshape(goal.shape)
+                    waypoint = torch.where(on.to(dev).reshape(-1, *([1] * (goal.ndim - 1))), found, goal)
         info[self.context_key], info[self.goal_key] = emb, waypoint[:, None]
         return info
 
