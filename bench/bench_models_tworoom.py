@@ -16,7 +16,7 @@ import time
 
 def run(args: argparse.Namespace) -> list[dict]:
     from stable_worldmodel.cli.stats import SuccessSummary
-    from stable_worldmodel.cli.worlds import episode_limit, evaluate_policy, make_policy, make_world, recording_noise
+    from stable_worldmodel.cli.worlds import episode_limit, evaluate_policy, make_policy, make_world, policy_history, recording_noise
     from stable_worldmodel.planning.learned import PlanSettings
     from stable_worldmodel.train import train
     from stable_worldmodel.wm import get_config_class
@@ -34,10 +34,11 @@ def run(args: argparse.Namespace) -> list[dict]:
         trained = time.perf_counter() - start
         prefix = get_config_class(model).eval_prefix
         plan = PlanSettings(seed=args.seed) if prefix == "wm" else None
-        with make_world(args.env, args.num_envs, 64, limit, seed=args.seed,
-                        history_size=result_history(result.folder)) as world:
+        policy = f"{prefix}:bench-{model}"
+        # the frames of history `swm eval` gives the policy: 1 for a planner (it encodes the current frame)
+        with make_world(args.env, args.num_envs, 64, limit, seed=args.seed, history_size=policy_history(policy)) as world:
             start = time.perf_counter()
-            results = evaluate_policy(world, f"{prefix}:bench-{model}", args.eval_episodes, args.seed, plan=plan)
+            results = evaluate_policy(world, policy, args.eval_episodes, args.seed, plan=plan)
             evaluated = time.perf_counter() - start
         steps = int(sum(results["episode_lengths"]))
         summary = SuccessSummary.from_results(model, results)
@@ -45,12 +46,6 @@ def run(args: argparse.Namespace) -> list[dict]:
                      "ms_per_step": 1000 * evaluated * args.num_envs / max(1, steps), "summary": summary})
         print_row(rows[-1], flush=True)
     return rows
-
-
-def result_history(folder) -> int:
-    import json
-
-    return int(json.loads((folder / "protocol.json").read_text()).get("history_size", 1))
 
 
 def print_row(row: dict, flush: bool = False) -> None:

@@ -167,13 +167,13 @@ def world_model_policy(
 
 
 #: registry names of the models whose goal embedding a graph waypoint can replace (PreJEPA: without proprio)
-GRAPH_MODELS = ("lewm", "pldm", "prejepa", "dinowm")
+GRAPH_MODELS = ("lewm", "pldm", "prejepa", "dinowm", "dreamer")
 
 
 def resolve_subgoals(run: str, settings: PlanSettings, cache_dir: str | None = None, *,
                      protocol: dict | None = None, block: int | None = None) -> PlanSettings:
     """``settings`` with ``subgoals="auto"`` kept where a subgoal graph can be built for checkpoint
-    ``run`` (trained by ``swm train`` as a LeWM, PLDM or PreJEPA without proprio, its training
+    ``run`` (trained by ``swm train`` as a LeWM, PLDM, Dreamer or PreJEPA without proprio, its training
     dataset on disk, its ``patience`` filled in for action blocks of ``block`` env steps, by
     default the run's frameskip) and made ``"none"`` elsewhere; other values are returned as they are."""
     if settings.subgoals != "auto":
@@ -241,9 +241,10 @@ def _exists(path: str) -> bool:
 
 class _WaypointHook:
     """``WorldModelPolicy.info_hook``: encode the frames and the goal once, and put the graph's
-    waypoint where the model's cost reads the encoded goal: ``goal_emb`` (LeWM, PLDM: ``(B, 1, D)``)
-    or ``pixels_goal_emb`` (PreJEPA without proprio: patch features ``(B, 1, P, Dv)``). Graph nodes
-    are the flattened embeddings.
+    waypoint where the model's cost reads the encoded goal: ``goal_emb`` (LeWM, PLDM, Dreamer:
+    ``(B, 1, D)``) or ``pixels_goal_emb`` (PreJEPA without proprio: patch features ``(B, 1, P, Dv)``).
+    Graph nodes are the flattened ``encode_pixels`` embeddings. Dreamer filters its context
+    itself (with the actions between frames), so its context key is None.
 
     ``patience`` (env steps; None: always aim at the waypoint) is ``subgoals="auto"``: an env aims
     at its goal until a :class:`~.subgoals.StallMonitor` (``steps_per_call`` env steps per replan,
@@ -257,8 +258,9 @@ class _WaypointHook:
         self.monitor = None if patience is None else StallMonitor(patience, steps_per_call, graph.radius)
 
     @staticmethod
-    def keys(model: Any) -> tuple[str, str]:
-        """The info keys the model caches its context and goal embeddings under."""
+    def keys(model: Any) -> tuple[str | None, str]:
+        """The info keys the model caches its context (None: not set by the hook) and goal embeddings under."""
+        from ..wm.dreamer import Dreamer
         from ..wm.jepa import EMB, GOAL_EMB, JEPA
         from ..wm.prejepa.prejepa import PIXELS_EMB, PreJEPA
 
@@ -266,7 +268,9 @@ class _WaypointHook:
             return EMB, GOAL_EMB
         if isinstance(model, PreJEPA) and not model.state_keys:
             return PIXELS_EMB, f"pixels_{GOAL_EMB}"
-        raise ConfigError(f"subgoals='graph' requires LeWM, PLDM or a PreJEPA without proprio, got {type(model).__name__}")
+        if isinstance(model, Dreamer):
+            return None, GOAL_EMB
+        raise ConfigError(f"subgoals='graph' requires LeWM, PLDM, Dreamer or a PreJEPA without proprio, got {type(model).__name__}")
 
     @classmethod
     def check(cls, model: Any, run: str) -> None:
@@ -287,7 +291,8 @@ class _WaypointHook:
 
         dev = next(self.model.parameters()).device
         with torch.inference_mode():
-            emb = self.model.encode_pixels(info[keys.PIXELS].to(dev))  # (B, T, ...)
+            pixels = info[keys.PIXELS].to(dev)  # (B, T, C, h, w)
+            emb = self.model.encode_pixels(pixels if self.context_key else pixels[:, -1:])  # (B, T, ...)
             goal = self.model.encode_pixels(info[keys.GOAL].to(dev))[:, -1]  # (B, ...)
             current, flat_goal = emb[:, -1].flatten(1), goal.flatten(1)
             if self.monitor is None:
@@ -300,7 +305,9 @@ class _WaypointHook:
                 if bool(on.any()):
                     found = self.graph.waypoints(current, flat_goal).reshape(goal.shape)
                     waypoint = torch.where(on.to(dev).reshape(-1, *([1] * (goal.ndim - 1))), found, goal)
-        info[self.context_key], info[self.goal_key] = emb, waypoint[:, None]
+        if self.context_key:
+            info[self.context_key] = emb
+        info[self.goal_key] = waypoint[:, None]
         return info
 
 

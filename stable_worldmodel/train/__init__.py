@@ -133,11 +133,11 @@ def train(
         cfg.prepare_model(net)
     features = None
     frozen = getattr(net, "frozen_encoder", None)
-    if callable(frozen):  # an encoder with statistics of the data (standardization) learns them here, once
-        from .features import fit_frozen_encoder
+    # statistics of the data (a frozen encoder's standardization, Dreamer's mean frame) are learned here, once
+    from .features import fit_frozen_encoder
 
-        if fit_frozen_encoder(frozen().to(dev), data.dataset, data.train_episodes, cfg, dev):
-            logger.info("Frozen encoder fitted to the training frames of %s", dataset)
+    if fit_frozen_encoder((frozen() if callable(frozen) else net).to(dev), data.dataset, data.train_episodes, cfg, dev):
+        logger.info("%s fitted to the training frames of %s", "Frozen encoder" if callable(frozen) else "Model", dataset)
     if feature_cache and callable(frozen) and not data.goals:
         from .features import load_or_compute_features
 

@@ -89,6 +89,26 @@ def fit(toy):
     return run
 
 
+@pytest.fixture
+def graph_plan(monkeypatch):
+    """``graph_plan(run) -> (policy, protocol, infos)``: ``wm:run`` with ``subgoals="graph"`` (horizon 2,
+    lookahead 1) evaluated on 2 Toy episodes of 3 steps (history 2); ``infos`` are the infos each
+    solve got (copies taken before the model adds its encodings)."""
+    import stable_worldmodel as swm
+    from stable_worldmodel.planning.learned import PlanSettings, world_model_policy
+
+    def run(name: str):
+        settings = PlanSettings(horizon=2, samples=8, iterations=1, subgoals="graph", lookahead=1)
+        policy, protocol = world_model_policy(name, settings, device="cpu")
+        seen = []
+        solve = policy.solver.solve
+        monkeypatch.setattr(policy.solver, "solve", lambda info, init_action=None: seen.append(dict(info)) or solve(info, init_action))
+        with swm.World("swm/Toy-v0", 2, (16, 16), max_episode_steps=3, verbose=0, history_size=2) as world:
+            world.set_policy(policy)
+            assert world.evaluate(episodes=2, seed=0)["episode_count"] == 2
+        return policy, protocol, seen
+
+    return run
 
 
 @pytest.fixture

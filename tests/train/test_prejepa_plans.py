@@ -27,7 +27,7 @@ def test_a_proprio_model_plans_with_the_normalizer_it_was_trained_with(toy, _sta
     assert out["episode_count"] == 2
 
 
-def test_subgoal_graph_on_patch_features_and_not_with_proprio(toy, _stablewm_home, monkeypatch):
+def test_subgoal_graph_on_patch_features_and_not_with_proprio(toy, _stablewm_home, graph_plan):
     """``subgoals="graph"`` with a PreJEPA: nodes are flattened patch features, the waypoint goes
     where its cost reads the goal's (``pixels_goal_emb``); a proprio PreJEPA is refused (its goal
     proprio would still be the final goal's)."""
@@ -37,15 +37,8 @@ def test_subgoal_graph_on_patch_features_and_not_with_proprio(toy, _stablewm_hom
     from stable_worldmodel.errors import ConfigError
 
     train("prejepa", toy, steps=2, progress=False, name="pj", val_every=0, **NET)
-    policy, protocol = world_model_policy("pj", PlanSettings(horizon=2, samples=8, iterations=1, subgoals="graph", lookahead=1),
-                                          device="cpu")
+    policy, protocol, seen = graph_plan("pj")
     assert protocol["plan"]["graph"]["nodes"] > 0
-    seen = []
-    solve = policy.solver.solve
-    monkeypatch.setattr(policy.solver, "solve", lambda info, init_action=None: seen.append(dict(info)) or solve(info, init_action))
-    with swm.World("swm/Toy-v0", 2, (16, 16), max_episode_steps=3, verbose=0, history_size=2) as world:
-        world.set_policy(policy)
-        assert world.evaluate(episodes=2, seed=0)["episode_count"] == 2
     feats = seen[0]["pixels_emb"]  # (B, T, P, Dv), and the waypoint (B, 1, P, Dv): one of the graph's nodes
     waypoint = seen[0]["pixels_goal_emb"]
     assert feats.shape[:2] == (2, 2) and waypoint.shape == (2, 1, *feats.shape[2:])

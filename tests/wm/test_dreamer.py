@@ -52,7 +52,8 @@ def test_shapes_of_every_verb(model):
         assert model.get_cost(plan_info(2, 3), randn(2, 3, 4, A)).shape == (2, 3)
         assert model.get_cost({keys.PIXELS: images(2, 2), keys.GOAL: images(2, 1)}, randn(2, 4, A)).shape == (2,)
         assert model.decode(randn(2, 5, F)).shape == (2, 5, 3, IMAGE, IMAGE)
-        assert model.encode_goal(images(2, 1)).shape == (2, 1, F)
+        assert model.encode_goal(images(2, 1)).shape == (2, 1, 8)  # the frame embedding (embed_dim)
+        assert model.predict_embedding(randn(2, 5, F)).shape == (2, 5, 8)
 
 
 def test_rollout_keeps_the_context_and_depends_on_actions(model):
@@ -75,8 +76,17 @@ def test_get_cost_encodes_context_and_goal_once_per_plan(model):
         second = model.get_cost(info, randn(2, 3, 4, A, seed=1))
         assert len(calls) == 2
         again = model.get_cost(info, randn(2, 3, 4, A))
-    assert info["emb"].shape == (2, 3, 2, F) and info["goal_emb"].shape == (2, 3, 1, F)
+    assert info["emb"].shape == (2, 3, 2, F) and info["goal_emb"].shape == (2, 3, 1, 8)
     assert torch.equal(first, again) and not torch.equal(first, second)
+
+
+def test_cost_compares_the_predicted_frame_embedding_with_the_goal_frames(model):
+    info, cand = plan_info(2, 3), randn(2, 3, 4, A)
+    with torch.no_grad():
+        cost = model.get_cost(info, cand)
+        last = model.predict_embedding(info["predicted_emb"][:, :, -1])  # (B, S, E)
+        goal = model.encode_pixels(info["goal"][:, 0, -1])  # (B, E)
+    assert torch.allclose(cost, (last - goal[:, None]).square().sum(-1), atol=1e-5)
 
 
 def test_get_cost_final_and_min(model):
@@ -99,15 +109,56 @@ def test_kl_terms_are_nonnegative_and_free_bits_clip_them(model):
     terms = unclipped.kl_terms((mean, std), (randn(4, 3, 4, seed=3), std))
     assert float(terms["dyn_loss"]) >= 0 and float(terms["rep_loss"]) >= 0
     out = model.train().loss(batch())
-    assert set(out) == {"loss", "recon_loss", "kl", "dyn_loss", "rep_loss"}
+    assert set(out) == {"loss", "recon_loss", "kl", "dyn_loss", "rep_loss", "embed_loss"}
     assert float(out["kl"]) >= 0 and float(out["dyn_loss"]) >= 1.0 and float(out["rep_loss"]) >= 1.0
 
 
-def test_loss_decreases():
+def test_loss_decreases(dot_data):
     model = make(free_bits=0.0).train()
-    data = batch()
+    data = dot_data(n=8, steps=3)
     losses = fit_losses(model, data)
     assert np.isfinite(losses).all() and losses[-1] < 0.7 * losses[0]
+
+
+def test_reconstruction_is_summed_over_each_frame(model):
+    # a unit-variance Gaussian log-likelihood: a few wrong pixels cost as much in a big frame as in a small one
+    data = batch()
+    out = model.loss(data)  # eval mode: z is the mean, so the two filterings agree
+    with torch.no_grad():
+        feats = model.observe(data[keys.PIXELS], data[keys.ACTION])[0]
+    err = (model.decode(feats) - data[keys.PIXELS]).square()
+    assert float(out["recon_loss"]) == pytest.approx(float(err.sum((2, 3, 4)).mean()), rel=1e-4)
+
+
+def test_fit_to_frames_keeps_the_mean_frame_which_decode_adds(model):
+    frames = images(6, 1, seed=3)[:, 0]
+    emb = randn(2, F, seed=4)
+    with torch.no_grad():
+        before = model.decode(emb)
+        model.fit_to_frames(frames)
+        after = model.decode(emb)
+    assert torch.allclose(model.frame_mean, frames.mean(0))
+    assert torch.allclose(after - before, frames.mean(0).expand_as(after), atol=1e-6)
+    assert "frame_mean" in model.state_dict()
+    with pytest.raises(SpaceError, match=r"\(6, 1, 3, 16, 16\)"):
+        model.fit_to_frames(images(6, 1))
+
+
+def test_training_fits_the_mean_frame(toy):
+    from stable_worldmodel.train import train
+
+    train("dreamer", "toy", steps=1, batch_size=4, device="cpu", progress=False, name="dr-mean", val_every=0,
+          warmup_steps=0, **NET)
+    import h5py
+
+    loaded = wm.load_pretrained("dr-mean")
+    protocol = wm.utils.read_protocol(wm.utils.resolve_checkpoint("dr-mean"))
+    with h5py.File(protocol["dataset_path"]) as f:  # under 4096 frames: every training frame is used
+        lengths, offsets = f["ep_len"][:], f["ep_offset"][:]
+        rows = np.concatenate([np.arange(offsets[e], offsets[e] + lengths[e]) for e in protocol["train_episodes"]])
+        pixels = torch.from_numpy(f["pixels"][np.sort(rows)]).permute(0, 3, 1, 2).float()
+    expected = (pixels / 255 - 0.5).mean(0) / 0.5  # the tiny preset's mean 0.5 / std 0.5
+    assert torch.allclose(loaded.frame_mean, expected, atol=1e-4)
 
 
 def test_reward_head_is_trained_and_needs_rewards():

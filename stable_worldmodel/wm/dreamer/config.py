@@ -20,9 +20,13 @@ class DreamerConfig(JEPAConfig):
     Model: the inherited image ``encoder`` (``embed_dim`` wide for the CNN), a GRU deterministic
     state of ``deter_dim``, a diagonal Gaussian stochastic state of ``stoch_dim`` (prior and
     posterior MLPs of ``hidden`` units) and a transposed-conv image decoder of ``cnn_width``
-    reading the features ``[h, z]`` (``deter_dim + stoch_dim`` numbers). Loss: MSE of the decoded
-    frames + ``kl_dyn * max(free_bits, KL(sg(post) || prior)) + kl_rep * max(free_bits,
-    KL(post || sg(prior)))`` (DreamerV3's balancing, 0.5 / 0.1 and 1 nat); with ``reward_head``
+    reading the features ``[h, z]`` (``deter_dim + stoch_dim`` numbers), and an ``embed_head``
+    predicting a frame's encoder embedding from the prior's features (planning compares it with
+    the goal frame's). Loss: squared error of the decoded frames summed over each frame (a
+    unit-variance Gaussian; the decoder adds the training frames' mean, fitted before training)
+    + ``kl_dyn * max(free_bits, KL(sg(post) || prior)) + kl_rep * max(free_bits,
+    KL(post || sg(prior)))`` (DreamerV3's balancing, 0.5 / 0.1 and 1 nat) + ``embed_coef`` times
+    the embedding head's MSE (to detached embeddings); with ``reward_head``
     a reward MLP is trained with MSE (``reward_coef``) and the dataset must have a ``reward``
     column (``needs_reward``). Every sample has ``history_size + num_preds`` frames, all filtered
     by the posterior. The inherited predictor sizes (``depth``, ``heads``, ``dim_head``,
@@ -63,6 +67,7 @@ class DreamerConfig(JEPAConfig):
     recon_coef: float = 1.0
     reward_head: bool = False
     reward_coef: float = 1.0
+    embed_coef: float = 1.0
     history_size: int = 4
 
     def __post_init__(self) -> None:
@@ -72,7 +77,7 @@ class DreamerConfig(JEPAConfig):
             value = getattr(self, key)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ConfigError(f"{name} requires {key} to be a positive int, got {value!r}")
-        for key in ("kl_dyn", "kl_rep", "free_bits", "recon_coef", "reward_coef"):
+        for key in ("kl_dyn", "kl_rep", "free_bits", "recon_coef", "reward_coef", "embed_coef"):
             value = getattr(self, key)
             if isinstance(value, bool) or not isinstance(value, (int, float)) or value < 0:
                 raise ConfigError(f"{name} requires {key} to be a number >= 0, got {value!r}")
@@ -103,4 +108,5 @@ class DreamerConfig(JEPAConfig):
             "recon_coef": float(self.recon_coef),
             "reward_head": self.reward_head,
             "reward_coef": float(self.reward_coef),
+            "embed_coef": float(self.embed_coef),
         }

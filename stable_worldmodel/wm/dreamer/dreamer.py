@@ -1,9 +1,14 @@
-"""Dreamer: an RSSM world model that plans on the latent distance to the encoded goal.
+"""Dreamer: an RSSM world model that plans on the distance of the frame embedding it predicts to
+the goal frame's.
 
 Follows the contract of :mod:`stable_worldmodel.wm.jepa`. ``emb`` of a context are the
 posterior features ``[h, z]`` of each frame, filtered from the zero state with the context's
 ``action`` (zeros when the info has none); :meth:`Dreamer.rollout` imagines with the prior from
-the last context state; the goal frame is encoded with the posterior from the zero state.
+the last context state. The goal is compared in the space of the image encoder's frame
+embeddings: ``embed_head`` learns to predict a frame's embedding from the prior's features of
+that step (what imagination produces), and the goal frame is simply encoded. A state's
+features are not comparable with a lone goal frame's posterior: its deterministic part carries
+the history, which a single frame does not have.
 """
 
 from __future__ import annotations
@@ -34,17 +39,21 @@ class Dreamer(nn.Module):
 
     def __init__(self, encoder: nn.Module, decoder: nn.Module, rssm: RSSM, action_dim: int, history_size: int = 4,
                  kl_dyn: float = 0.5, kl_rep: float = 0.1, free_bits: float = 1.0, recon_coef: float = 1.0,
-                 reward_head: bool = False, reward_coef: float = 1.0):
+                 reward_head: bool = False, reward_coef: float = 1.0, embed_coef: float = 1.0):
         super().__init__()
         if int(action_dim) != rssm.action_dim:
             raise ConfigError(f"Dreamer requires action_dim == rssm.action_dim, got {action_dim} and {rssm.action_dim}")
         self.encoder, self.decoder, self.rssm = encoder, decoder, rssm
         self.action_dim, self._history_size = int(action_dim), int(history_size)
         self.kl_dyn, self.kl_rep, self.free_bits = float(kl_dyn), float(kl_rep), float(free_bits)
-        self.recon_coef, self.reward_coef = float(recon_coef), float(reward_coef)
+        self.recon_coef, self.reward_coef, self.embed_coef = float(recon_coef), float(reward_coef), float(embed_coef)
         f = rssm.feat_dim
+        self.embed_head = nn.Sequential(nn.Linear(f, f), nn.LayerNorm(f), nn.SiLU(), nn.Linear(f, rssm.embed_dim))
         self.reward = nn.Sequential(nn.Linear(f, f), nn.SiLU(), nn.Linear(f, 1)) if reward_head else None
         self.goal_cost = "final"  # see GOAL_COSTS; set by planning, not saved
+        size = int(getattr(decoder, "image_size", 0))
+        # the training frames' mean (fit_to_frames): the decoder learns what differs from it
+        self.register_buffer("frame_mean", torch.zeros(int(getattr(decoder, "channels", 3)), size, size))
 
     @property
     def history_size(self) -> int:
@@ -87,16 +96,28 @@ class Dreamer(nn.Module):
         return info
 
     def encode_goal(self, pixels: torch.Tensor) -> torch.Tensor:
-        """``(..., C, h, w)`` -> ``(..., F)``: each frame's posterior features from the zero state."""
-        embed = self.encode_pixels(pixels)
-        flat = embed.reshape(-1, embed.shape[-1])
-        h, z = self.rssm.initial(flat.shape[0], flat)
-        h, z, _, _ = self.rssm.obs_step(h, z, flat.new_zeros(flat.shape[0], self.action_dim), flat)
-        return torch.cat([h, z], -1).reshape(*embed.shape[:-1], -1)
+        """``(..., C, h, w)`` -> ``(..., E)``: the goal frames' embeddings (:meth:`encode_pixels`),
+        which :meth:`predict_embedding` of the imagined states is compared with."""
+        return self.encode_pixels(pixels)
+
+    def predict_embedding(self, feats: torch.Tensor) -> torch.Tensor:
+        """Features ``(..., F)`` -> the embedding ``(..., E)`` of the frame the state would show."""
+        return self.embed_head(feats)
 
     def decode(self, emb: torch.Tensor) -> torch.Tensor:
-        """Features ``(..., F)`` -> images ``(..., C, h, w)`` (normalized pixel space)."""
-        return self.decoder(emb)
+        """Features ``(..., F)`` -> images ``(..., C, h, w)`` (normalized pixel space): the
+        decoder's output added to the training frames' mean (:meth:`fit_to_frames`)."""
+        return self.decoder(emb) + self.frame_mean
+
+    @torch.no_grad()
+    def fit_to_frames(self, pixels: torch.Tensor) -> None:
+        """Keep the mean of preprocessed training frames ``(N, C, h, w)`` (called by
+        :func:`~stable_worldmodel.train.train` before the first step): the static background is
+        then reconstructed from the start, and the latent spends its capacity on what moves."""
+        if pixels.ndim != 4 or pixels.shape[0] < 1 or tuple(pixels.shape[1:]) != tuple(self.frame_mean.shape):
+            raise SpaceError(f"{type(self).__name__}.fit_to_frames requires frames (N, {', '.join(map(str, self.frame_mean.shape))}), "
+                             f"got shape {tuple(pixels.shape)}")
+        self.frame_mean.copy_(pixels.to(self.frame_mean).mean(0))
 
     # -- planning -------------------------------------------------------------------------------
     def _cached(self, info: dict, cache: str, b: int, s: int | None, compute) -> torch.Tensor:
@@ -144,7 +165,8 @@ class Dreamer(nn.Module):
         return info
 
     def get_cost(self, info: dict, action_candidates: torch.Tensor) -> torch.Tensor:
-        """Squared distance of the imagined features to the goal's (last goal frame): ``(B, S)``."""
+        """Squared distance of the frame embeddings predicted along the imagined states to the goal's
+        (last goal frame): ``(B, S)``."""
         squeeze = action_candidates.ndim == 3
         b, s = action_candidates.shape[0], None if squeeze else action_candidates.shape[1]
 
@@ -154,10 +176,11 @@ class Dreamer(nn.Module):
                 goal = goal[:, 0]
             return self.encode_goal(goal)
 
-        goal = self._cached(info, GOAL_EMB, b, s, compute)  # (B, Tg, F)
+        goal = self._cached(info, GOAL_EMB, b, s, compute)  # (B, Tg, E)
         self.rollout(info, action_candidates)
         target = goal[:, -1] if squeeze else goal[:, -1].unsqueeze(1)
-        return goal_distance(info[PREDICTED_EMB], target, self.goal_cost, context=info[EMB].shape[-2])
+        predicted = self.predict_embedding(info[PREDICTED_EMB])
+        return goal_distance(predicted, target, self.goal_cost, context=info[EMB].shape[-2])
 
     # -- training -------------------------------------------------------------------------------
     def kl_terms(self, prior: tuple, post: tuple) -> dict[str, torch.Tensor]:
@@ -171,16 +194,24 @@ class Dreamer(nn.Module):
 
     def loss(self, batch: dict) -> dict:
         """``batch``: ``pixels (B, T, C, h, w)``, ``action (B, T, A)`` (and ``reward (B, T)`` with a
-        reward head). Returns ``loss``, ``recon_loss``, ``kl``, ``dyn_loss``, ``rep_loss`` (``reward_loss``)."""
+        reward head). Returns ``loss``, ``recon_loss`` (squared error summed over each frame),
+        ``kl``, ``dyn_loss``, ``rep_loss``, ``embed_loss`` (MSE of ``embed_head`` on the prior's
+        features of frames 1.. against their detached embeddings) (and ``reward_loss``)."""
         who = f"{type(self).__name__}.loss"
         pixels = _require(batch, keys.PIXELS, who)
         action = _require(batch, keys.ACTION, who)
         if pixels.ndim != 5 or pixels.shape[1] < 2:
             raise SpaceError(f"{who} requires pixels (B, T >= 2, C, h, w), got shape {tuple(pixels.shape)}")
-        feats, prior, post = self.observe(pixels, action)
-        recon = F.mse_loss(self.decode(feats), pixels.to(feats.dtype))
+        embed = self.encode_pixels(pixels)
+        feats, prior, post = self.rssm.observe(embed, self._actions(action, embed))
+        # a unit-variance Gaussian's log-likelihood: squared errors summed over each frame's values
+        recon = (self.decode(feats) - pixels.to(feats.dtype)).square().flatten(2).sum(-1).mean()
         out = {"recon_loss": recon, **self.kl_terms(prior, post)}
-        total = self.recon_coef * recon + self.kl_dyn * out["dyn_loss"] + self.kl_rep * out["rep_loss"]
+        # what imagination gives: h and the prior's mean (frame 0's prior knows nothing yet)
+        prior_feats = torch.cat([feats[:, 1:, : self.rssm.deter_dim], prior[0][:, 1:]], -1)
+        out["embed_loss"] = F.mse_loss(self.predict_embedding(prior_feats), embed[:, 1:].detach())
+        total = (self.recon_coef * recon + self.kl_dyn * out["dyn_loss"] + self.kl_rep * out["rep_loss"]
+                 + self.embed_coef * out["embed_loss"])
         if self.reward is not None:
             reward = _require(batch, keys.REWARD, who).to(feats.dtype)
             pred = self.reward(feats[:, 1:]).squeeze(-1)  # reward[:, k] is earned by the block leading to frame k + 1

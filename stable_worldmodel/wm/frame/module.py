@@ -29,7 +29,7 @@ class FrameDecoder(nn.Module):
         for name, value in (("embed_dim", embed_dim), ("image_size", image_size), ("channels", channels), ("width", width)):
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ConfigError(f"FrameDecoder requires {name} to be a positive int, got {value!r}")
-        self.image_size = image_size
+        self.image_size, self.channels = image_size, channels
         ups = max(0, math.ceil(math.log2(max(image_size, BASE) / BASE)))
         widths = [width * min(8, 2 ** (ups - k)) for k in range(ups + 1)]  # coarse -> fine
         self.stem = nn.Linear(embed_dim, widths[0] * BASE * BASE)
