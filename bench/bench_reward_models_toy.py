@@ -10,7 +10,10 @@ model's tiny preset, evaluate its MPPI / CEM plans and the random policy on the 
 ``--eval-episodes`` seeds. Prints a markdown table (validation loss first -> last, success with
 its 95% interval, times). Runs in a scratch ``$STABLEWM_HOME``; never asserts.
 
-Usage: python bench/bench_reward_models_toy.py [--models tdmpc2 dreamer lewm] [--episodes 200]
+A model name may end in ``+proprio`` (``tdmpc2+proprio``): it then also encodes the ``proprio`` column (the
+agent's position; TD-MPC2's usual state input, ``proprio_dim=2``).
+
+Usage: python bench/bench_reward_models_toy.py [--models tdmpc2 tdmpc2+proprio dreamer lewm] [--episodes 200]
        [--eval-episodes 50] [--max-steps 40] [--steps N]
 """
 
@@ -28,7 +31,7 @@ GOAL = (0.5, 0.5)
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--models", nargs="+", default=["tdmpc2", "dreamer", "lewm"])
+    parser.add_argument("--models", nargs="+", default=["tdmpc2", "tdmpc2+proprio", "dreamer", "lewm"])
     parser.add_argument("--episodes", type=int, default=200)
     parser.add_argument("--eval-episodes", type=int, default=50)
     parser.add_argument("--max-steps", type=int, default=40)
@@ -68,15 +71,18 @@ def run(args: argparse.Namespace) -> None:
     print("| --- | ---: | ---: | ---: |")
     summary, seconds = evaluate("random")
     print(row("random", "", summary, f"{seconds:.0f} s"), flush=True)
-    for model in args.models:
+    for spec in args.models:
+        model, _, extra = spec.partition("+")
+        overrides = {"proprio_dim": 2} if extra == "proprio" else {}
+        name = f"toy-{model}{'-proprio' if overrides else ''}"
         t = time.perf_counter()
-        result = train(model, "toy-goal", "tiny", steps=args.steps, name=f"toy-{model}", seed=0, progress=False)
+        result = train(model, "toy-goal", "tiny", steps=args.steps, name=name, seed=0, progress=False, **overrides)
         trained = time.perf_counter() - t
         val = [r["val/loss"] for r in map(json.loads, (result.folder / "metrics.jsonl").read_text().splitlines()) if "val/loss" in r]
         solver = "mppi" if model == "tdmpc2" else "cem"
-        summary, seconds = evaluate(f"wm:toy-{model}", PlanSettings(solver=solver, seed=args.seed))
+        summary, seconds = evaluate(f"wm:{name}", PlanSettings(solver=solver, seed=args.seed))
         losses = f"{val[0]:.4f} -> {val[-1]:.4f}" if val else "n/a"
-        print(row(f"{model} tiny + {solver}", losses, summary, f"{trained:.0f} + {seconds:.0f} s"), flush=True)
+        print(row(f"{spec} tiny + {solver}", losses, summary, f"{trained:.0f} + {seconds:.0f} s"), flush=True)
 
 
 def row(label: str, losses: str, s, times: str) -> str:

@@ -48,8 +48,9 @@ class WorldModelPolicy(BasePolicy):
       plan ``(B, H - receding_horizon, A)`` warm-starts the next solve.
     - Returns actions shaped like ``env.action_space`` ``(B, ...)``.
 
-    The infos are passed with all their history frames: make the World's ``history_size``
-    equal to ``config.history_len``. When an env starts a new episode mid-plan or at a
+    The model gets the last ``config.history_len`` frames of each info ``(B, T, ...)`` (a World
+    with a longer ``history_size`` gives more; the rest are dropped: a model encoding more frames
+    than it was planned for would score the wrong action blocks). When an env starts a new episode mid-plan or at a
     plan's end (its ``step_idx`` info is 0), every env replans without warm start, so no env
     acts on, or starts from, a plan made for its previous episode; :meth:`reset_plan` forces
     a replan too.
@@ -166,6 +167,8 @@ class WorldModelPolicy(BasePolicy):
         return restarted
 
     def _replan(self, info_dict: Mapping[str, Any]) -> None:
+        h = self.cfg.history_len
+        info_dict = {k: v[:, -h:] if getattr(v, "ndim", 0) >= 2 and v.shape[1] > h else v for k, v in info_dict.items()}
         info = prepare_info(info_dict, self.process, self.transform)
         if self.info_hook is not None:
             info = self.info_hook(info)

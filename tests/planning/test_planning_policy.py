@@ -110,6 +110,16 @@ def test_reset_plan_forces_a_replan_without_warm_start():
     assert len(solver.calls) == 2 and solver.calls[1][1] is None
 
 
+def test_the_model_gets_the_last_history_len_frames():
+    infos = {"state": np.arange(2 * 4 * 3, dtype=np.float32).reshape(2, 4, 3), "step_idx": np.ones((2, 4), np.int64)}
+    for history in (1, 2, 4):
+        policy, solver = make_policy(PlanConfig(horizon=2, receding_horizon=1, history_len=history))
+        policy.get_action(infos)
+        got = solver.calls[0][0]
+        assert got["state"].shape == (2, history, 3) and tuple(got["step_idx"].shape) == (2, history)
+        np.testing.assert_array_equal(np.asarray(got["state"]), infos["state"][:, -history:])
+
+
 class Scale:
     def __init__(self, k):
         self.k = k
