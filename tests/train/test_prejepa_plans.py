@@ -41,7 +41,8 @@ def test_subgoal_graph_on_patch_features_and_not_with_proprio(toy, _stablewm_hom
     assert protocol["plan"]["graph"]["nodes"] > 0
     feats = seen[0]["pixels_emb"]  # (B, T, P, Dv), and the waypoint (B, 1, P, Dv): one of the graph's nodes
     waypoint = seen[0]["pixels_goal_emb"]
-    assert feats.shape[:2] == (2, 2) and waypoint.shape == (2, 1, *feats.shape[2:])
+    # the World keeps 2 frames, the policy gives the model its history_len (1)
+    assert feats.shape[:2] == (2, 1) and waypoint.shape == (2, 1, *feats.shape[2:])
     nodes = policy.info_hook.graph.embeddings
     goal = policy.solver.model.encode_pixels(seen[0][keys.GOAL][:, -1])  # (B, P, Dv)
     for w, g in zip(waypoint[:, 0], goal):  # a node of the graph, or the goal itself once within the lookahead
