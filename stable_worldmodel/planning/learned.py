@@ -315,15 +315,22 @@ def attach_prediction_panel(policy: Any, run: str, decoder: str | None = None, *
                             cache_dir: str | None = None) -> str | None:
     """Make ``policy`` (a ``wm:run`` :class:`~stable_worldmodel.policy.WorldModelPolicy`) decode
     what it predicts with frame decoder run ``decoder`` (default: ``<run>-frame`` when it
-    exists; ``swm train frame --from RUN`` makes it), so ``World.record_video`` shows it.
-    Returns the decoder run used, or None when there is none to use."""
+    exists; ``swm train frame --from RUN`` makes it; else the model's own image decoder when it
+    has one, as Dreamer), so ``World.record_video`` shows it. Returns the decoder run used
+    (``run`` for the model's own decoder), or None when there is none to use."""
     from ..train.trainer import resolve_device
     from ..wm.frame import FrameModel, PredictionPanel
-    from ..wm.utils import checkpoint_root, load_checkpoint
+    from ..wm.utils import checkpoint_root, load_checkpoint, read_protocol, resolve_checkpoint
 
     name = decoder or f"{run}-frame"
     if decoder is None and not (checkpoint_root(cache_dir) / name).is_dir():
-        return None
+        model = policy.solver.model
+        if not getattr(model, "decodes_frames", False):
+            return None
+        protocol = read_protocol(resolve_checkpoint(run, cache_dir))
+        policy.prediction_panel = PredictionPanel(model, None, protocol.get("image_mean", (0.5,) * 3),
+                                                  protocol.get("image_std", (0.5,) * 3))
+        return run
     frame, protocol = load_checkpoint(name, cache_dir)
     if not isinstance(frame, FrameModel):
         raise ConfigError(f"A prediction panel requires a frame decoder run (swm train frame --from {run}), got {type(frame).__name__} in {name!r}")

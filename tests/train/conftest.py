@@ -23,6 +23,8 @@ TINY = {
     "dummy": dict(image_size=16, frameskip=1, warmup_steps=0),
     "lewm": dict(NET, sigreg_num_proj=16),
     "pldm": dict(NET, idm_hidden=16),
+    "dreamer": dict(image_size=16, cnn_width=8, embed_dim=8, deter_dim=16, stoch_dim=4, hidden=16, history_size=2,
+                    frameskip=1, warmup_steps=0),
 }
 
 

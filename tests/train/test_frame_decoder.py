@@ -69,3 +69,37 @@ def test_eval_video_shows_the_predicted_frames(swm, fit, tmp_path):
     assert frame.shape[1] == 2 * 16  # the env's frame, then the predicted one (the goal below)
     refused = swm(*args, "--decoder", "lw-frame")
     assert refused.exit_code != 0 and "--video" in refused.output
+
+
+def test_dreamer_videos_show_its_own_decoded_predictions(swm, fit, tmp_path):
+    import av
+
+    fit("dreamer", "dr", steps=2)
+    args = ["eval", "swm/Toy-v0", "--policy", "wm:dr", "-n", "1", "--samples", "4", "--iterations", "1", "--horizon", "2",
+            "--image-size", "16", "--max-steps", "4", "--subgoals", "none"]
+    out = swm(*args, "--video", str(tmp_path / "v"), "--json", str(tmp_path / "v.json"))
+    assert out.exit_code == 0, out.output
+    assert json.loads((tmp_path / "v.json").read_text())["decoder"] == "dr"  # no dr-frame run: its own decoder
+    with av.open(str(tmp_path / "v" / "env_0.mp4")) as video:
+        frame = next(video.decode(video=0)).to_ndarray(format="rgb24")
+    assert frame.shape[1] == 2 * 16
+
+
+def test_a_frame_decoder_reads_dreamer_predictions_through_its_embedding_head(fit):
+    from stable_worldmodel import keys
+    from stable_worldmodel.wm.frame import PredictionPanel
+
+    fit("dreamer", "dr", steps=2)
+    model, _ = load_checkpoint("dr")
+    decoder = FrameModel(model, FrameDecoder(embed_dim=model.rssm.embed_dim, image_size=16, width=4)).eval()
+    seen = []
+    decoder.decoder.register_forward_hook(lambda mod, args, out: seen.append(args[0].shape))
+    panel = PredictionPanel(model, decoder, (0.5,) * 3, (0.5,) * 3)
+    frames = panel({keys.PIXELS: torch.zeros(2, 1, 3, 16, 16)}, torch.zeros(2, 2, model.action_dim))
+    assert frames.shape == (2, 16, 16, 3) and frames.dtype == np.uint8
+    assert seen == [torch.Size([2, model.rssm.embed_dim])]  # the predicted frame embedding, not the RSSM state
+    own = PredictionPanel(model, None, (0.5,) * 3, (0.5,) * 3)
+    assert own({keys.PIXELS: torch.zeros(2, 1, 3, 16, 16)}, torch.zeros(2, 2, model.action_dim)).shape == (2, 16, 16, 3)
+    other = FrameModel(model, decoder.decoder)  # a model without decodes_frames needs a frame model
+    with pytest.raises(ConfigError, match="own decode"):
+        PredictionPanel(other, None, (0.5,) * 3, (0.5,) * 3)

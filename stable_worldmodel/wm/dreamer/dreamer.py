@@ -35,7 +35,11 @@ def _require(info: dict, key: str, who: str) -> Any:
 
 class Dreamer(nn.Module):
     """``Dreamer(encoder, decoder, rssm, action_dim, history_size, kl_dyn, kl_rep, free_bits,
-    recon_coef, reward_head, reward_coef)``; see :class:`~stable_worldmodel.wm.dreamer.DreamerConfig`."""
+    recon_coef, reward_head, reward_coef, embed_coef)``; see :class:`~stable_worldmodel.wm.dreamer.DreamerConfig`."""
+
+    #: :meth:`decode` turns features (predicted ones included) into frames: ``swm eval --video``
+    #: shows them without a frame decoder run
+    decodes_frames = True
 
     def __init__(self, encoder: nn.Module, decoder: nn.Module, rssm: RSSM, action_dim: int, history_size: int = 4,
                  kl_dyn: float = 0.5, kl_rep: float = 0.1, free_bits: float = 1.0, recon_coef: float = 1.0,

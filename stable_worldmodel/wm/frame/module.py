@@ -104,9 +104,15 @@ class PredictionPanel:
     ``info`` (``pixels (B, T, C, S, S)``) and the executed normalized action blocks
     ``(B, R, A)``; it rolls the model out over them and returns the decoded last prediction
     as ``(B, S, S, 3)`` uint8 (the frame the model expects when the executed blocks end).
+    A model whose predicted state is not a frame latent maps it with its ``predict_embedding``
+    first (Dreamer); ``frame_model=None`` decodes with the model's own ``decode`` (a model
+    with ``decodes_frames = True``: Dreamer's image decoder).
     """
 
-    def __init__(self, world_model: Any, frame_model: FrameModel, image_mean, image_std):
+    def __init__(self, world_model: Any, frame_model: FrameModel | None, image_mean, image_std):
+        if frame_model is None and not getattr(world_model, "decodes_frames", False):
+            raise ConfigError(f"PredictionPanel requires a frame model, or a world model with its own decode; "
+                              f"{type(world_model).__name__} has none")
         self.world_model, self.frame_model = world_model, frame_model
         self.mean = torch.as_tensor(image_mean, dtype=torch.float32).view(-1, 1, 1)
         self.std = torch.as_tensor(image_std, dtype=torch.float32).view(-1, 1, 1)
@@ -118,6 +124,12 @@ class PredictionPanel:
             if actions.shape[1] < t:  # one action block per context frame at least (rollout's rule)
                 actions = torch.cat([actions[:, :1].expand(-1, t - actions.shape[1], -1), actions], dim=1)
             out = self.world_model.rollout(context, actions)
-            images = self.frame_model.decode(out["predicted_emb"][:, -1].to(next(self.frame_model.parameters()).device))
+            last = out["predicted_emb"][:, -1]
+            if self.frame_model is None:
+                images = self.world_model.decode(last)
+            else:
+                if callable(getattr(self.world_model, "predict_embedding", None)):
+                    last = self.world_model.predict_embedding(last)
+                images = self.frame_model.decode(last.to(next(self.frame_model.parameters()).device))
             images = images.float().cpu() * self.std + self.mean
         return (images.clamp(0, 1) * 255).round().to(torch.uint8).permute(0, 2, 3, 1).numpy()
