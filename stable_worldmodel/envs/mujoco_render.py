@@ -23,6 +23,7 @@ import atexit
 import os
 import sys
 import weakref
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
@@ -144,15 +145,24 @@ class MjRenderer:
     vertices in ``model``'s mesh frames. Its meshes are the ones uploaded to the GL context; the
     scene (poses, colours, lights, cameras) still comes from ``model`` and ``data``, and ``model``'s
     textures are copied into it first (factors may have changed them). ConfigError when its
-    geoms, meshes or textures do not match ``model``'s.
+    geoms, meshes or textures do not match ``model``'s. Its planes' grid spacing (``geom_size[:, 2]``,
+    which only sets how finely MuJoCo tessellates a plane for drawing) may differ from ``model``'s:
+    a coarser grid is a level of detail of the floor.
+
+    ``shadowless`` (optional; nothing to do at ``"low"``, which draws no shadows): ids of ``model``
+    geoms left out of the shadow map. They are drawn, lit and shadowed as usual but cast
+    no shadow: meant for a floor that nothing lies below (it could only shadow itself), which
+    otherwise costs a full draw into the shadow map every frame.
     """
 
-    def __init__(self, model, height: int, width: int, quality: str = "medium", mesh_model=None):
+    def __init__(self, model, height: int, width: int, quality: str = "medium", mesh_model=None,
+                 shadowless: Iterable[int] = ()):
         import mujoco
 
         self.quality = check_render_quality("MjRenderer", quality)
         self.height, self.width = int(height), int(width)
         self._model = model
+        shadowless = self._check_geoms(shadowless)
         gl_model = model if mesh_model is None else _matching_mesh_model(model, mesh_model)
         vis = gl_model.vis
         saved = (vis.global_.offwidth, vis.global_.offheight, vis.quality.shadowsize, vis.quality.offsamples)
@@ -167,6 +177,7 @@ class MjRenderer:
         finally:
             vis.global_.offwidth, vis.global_.offheight, vis.quality.shadowsize, vis.quality.offsamples = saved
         self._shadows = quality != "low"
+        self._shadowless = shadowless if self._shadows else frozenset()
         self._option = mujoco.MjvOption()
         self._camera = mujoco.MjvCamera()
         self._camera_ids: dict[str, int] = {}
@@ -194,7 +205,31 @@ class MjRenderer:
         mujoco.mjv_updateScene(self._model, data, option, None, cam, mujoco.mjtCatBit.mjCAT_ALL.value, r.scene)
         if not self._shadows:
             r.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = False
+        elif self._shadowless:
+            self._drop_from_shadow_map(r.scene)
         return r.render()
+
+    def _check_geoms(self, geoms: Iterable[int]) -> frozenset[int]:
+        ids = list(geoms)
+        ngeom = self._model.ngeom
+        wrong = [g for g in ids if isinstance(g, bool) or not isinstance(g, (int, np.integer)) or not 0 <= g < ngeom]
+        if wrong:
+            raise ConfigError(f"MjRenderer requires shadowless geom ids in [0, {ngeom}), got {wrong}")
+        return frozenset(int(g) for g in ids)
+
+    def _drop_from_shadow_map(self, scene) -> None:
+        """mjr_render draws every scene geom into the shadow map except decorative ones, and reads
+        the category nowhere else: marking a geom decorative keeps it out of the map only."""
+        import mujoco
+
+        geom, decor, left = mujoco.mjtObj.mjOBJ_GEOM.value, mujoco.mjtCatBit.mjCAT_DECOR.value, len(self._shadowless)
+        for i in range(scene.ngeom):
+            g = scene.geoms[i]
+            if g.objtype == geom and g.objid in self._shadowless:
+                g.category = decor
+                left -= 1
+                if not left:
+                    break
 
     def _camera_id(self, camera: int | str) -> int:
         if isinstance(camera, str):

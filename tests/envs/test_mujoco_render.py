@@ -94,6 +94,20 @@ def test_render_quality_and_its_errors(scene):
         mujoco_render.MjRenderer(model, 16, 16, "hihg")
 
 
+def test_shadowless_geoms_stay_out_of_the_shadow_map_only(scene):
+    model, data = scene  # geom 0: the floor, geom 1: the box; the light straight above
+    frames = {}
+    for name, geoms in (("all", ()), ("floor", [0]), ("box", np.array([1]))):
+        r = mujoco_render.MjRenderer(model, 16, 16, "medium", shadowless=geoms)
+        frames[name] = r.render(data, "c").astype(np.int64)
+        r.close()
+    np.testing.assert_array_equal(frames["floor"], frames["all"])  # the floor could only shadow itself
+    assert np.abs(frames["box"] - frames["all"]).mean() > 0.3  # the box's shadow is gone (measured 0.74)
+    for bad in ([2], [-1], ["0"], [True], [0.0]):
+        with pytest.raises(ConfigError, match="shadowless geom ids in \\[0, 2\\)"):
+            mujoco_render.MjRenderer(model, 16, 16, shadowless=bad)
+
+
 def test_closing_one_renderer_leaves_the_other_intact(scene):
     model, data = scene
     a, b = mujoco_render.MjRenderer(model, 16, 16), mujoco_render.MjRenderer(model, 16, 16)

@@ -345,6 +345,35 @@ def test_ogbench_decimated_arm_draws_the_same_64px_frame(cube):
     assert np.abs(frames[0] - frames[1]).mean() < 2.0  # measured ~1/255; a misplaced mesh gives > 5
 
 
+def test_ogbench_decimation_reaches_its_target_on_every_arm_mesh(cube):
+    from stable_worldmodel.envs.ogbench import meshes
+
+    cube.reset(seed=0)
+    exact, light = cube._model, cube._mesh_model()
+    for i in range(exact.nmesh):  # quadric collapse alone stalled at 54 % of the gripper mount's faces
+        n = int(exact.mesh_facenum[i])
+        assert light.mesh_facenum[i] <= (0.12 * n if n >= meshes.MIN_FACES else n), exact.mesh(i).name
+
+
+def test_ogbench_floor_is_drawn_coarser_and_left_out_of_the_shadow_map_below_high(cube):
+    from stable_worldmodel.envs.ogbench import meshes
+
+    cube.reset(seed=0)
+    floor = cube._floor_geoms()
+    assert len(floor) == 1 and cube._model.geom_size[floor[0], 2] == pytest.approx(0.01)  # OGBench's 1 cm grid
+    assert cube._mesh_model().geom_size[floor[0], 2] == pytest.approx(meshes.PLANE_GRID["medium"])
+    cube.render()
+    assert cube._mjr._shadowless == frozenset(floor)
+    high = CubeEnv(render_quality="high")
+    high.set_render_size(SIZE)
+    high.reset(seed=0)
+    high.render()
+    assert high._mjr._shadowless == frozenset() and meshes.PLANE_GRID["high"] is None  # upstream's picture
+    high.close()
+    with pytest.raises(ConfigError, match="plane_grid > 0"):
+        meshes.render_mesh_model(cube._model, "<mujoco/>", {}, 0.1, plane_grid=0)
+
+
 def test_ogbench_high_quality_keeps_exact_meshes_and_decimation_errors_are_typed(cube):
     from stable_worldmodel.envs.mujoco_render import MjRenderer
     from stable_worldmodel.envs.ogbench import meshes

@@ -13,7 +13,8 @@
   safe), rebuilt when the size or the model changes (a new floor texture is uploaded to the live
   context), freed by :meth:`close`. Below ``render_quality="high"`` it draws the arm's decimated
   meshes (:mod:`.meshes`: ``"medium"`` keeps 10 % of the faces of each large mesh, ``"low"`` 5 %,
-  physics untouched); ``"high"`` draws the exact meshes, upstream's picture.
+  physics untouched) and the floor with a coarser grid of quads, and leaves the floor out of the
+  shadow map (nothing is below it); ``"high"`` draws the exact meshes, upstream's picture.
 - **Goal**: the goal scene is built, settled for 2 zero-action steps and captured once per reset
   (``info["goal"]`` image, ``goal_state``, ``goal_proprio``, upstream's ``target`` = its
   observation), then the start scene is set.
@@ -151,15 +152,23 @@ class ManipMixin(DatasetResetMixin):
     def _mesh_model(self):
         """The model whose (decimated) meshes the renderer draws, or None for the exact ones
         (``render_quality="high"``, or fast-simplification missing): :mod:`.meshes`."""
-        ratio = meshes.MESH_DETAIL[self.render_quality]
+        ratio, grid = meshes.MESH_DETAIL[self.render_quality], meshes.PLANE_GRID[self.render_quality]
         if ratio is None or not meshes.available():
             return None
-        key = (*self._model_key(), ratio)
+        key = (*self._model_key(), ratio, grid)
         if key not in _MESH_MODELS:
             mj = self._mjcf_model
             _MESH_MODELS[key] = meshes.render_mesh_model(
-                _MODELS[self._model_key()], mjcf_utils.to_string(mj), mjcf_utils.get_assets(mj), ratio)
+                _MODELS[self._model_key()], mjcf_utils.to_string(mj), mjcf_utils.get_assets(mj), ratio,
+                plane_grid=grid)
         return _MESH_MODELS[key]
+
+    def _floor_geoms(self) -> list[int]:
+        """The ground planes (static, facing up): nothing lies below them, so below ``"high"`` they
+        are left out of the shadow map (they could only shadow themselves)."""
+        m = self._model
+        return [g for g in range(m.ngeom) if m.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE
+                and m.geom_bodyid[g] == 0 and self._data.geom_xmat[g, 8] > 0.999]
 
     def post_compilation_objects(self) -> None:
         super().post_compilation_objects()
@@ -404,7 +413,8 @@ class ManipMixin(DatasetResetMixin):
             raise ConfigError(f"{type(self).__name__} requires reset() before rendering")
         self._close_renderer()
         self._mjr = MjRenderer(self._model, self._render_height, self._render_width, self.render_quality,
-                               mesh_model=self._mesh_model())
+                               mesh_model=self._mesh_model(),
+                               shadowless=self._floor_geoms() if self.render_quality != "high" else ())
 
     def render(self, camera: str | None = None) -> np.ndarray:
         """The ``(H, W, 3)`` uint8 frame from ``camera`` (default ``front_pixels``, as upstream)."""

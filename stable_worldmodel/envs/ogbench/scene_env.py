@@ -23,7 +23,8 @@ upstream 0.1.1 exposes it, on top of ``ogbench.manipspace`` (this class subclass
   cube position error + drawer and window errors + number of wrong buttons).
 - **Rendering**: ``front_pixels`` at 200 x 200 by default; ``multiview=True`` gives
   ``{front, front_pixels, side_pixels}``. ``render_quality`` as for Cube: ``"high"`` exact,
-  ``"medium"`` / ``"low"`` draw the arm's decimated meshes (:mod:`.meshes`).
+  ``"medium"`` / ``"low"`` draw the arm's decimated meshes and a coarser floor grid (:mod:`.meshes`)
+  and keep the floor out of the shadow map.
 
 Deliberate differences from upstream 0.1.1: the cube factors place the cube and the
 start / goal of buttons, drawer and window are drawn from the reset seed (upstream: OGBench's
