@@ -21,7 +21,7 @@ def _float_pos(value: str) -> float:
 
 
 def train_cmd(
-    model: Annotated[str, typer.Argument(help="Model to train: lewm, pldm, prejepa, dummy (world models), gcbc, gcivl, gciql (goal-conditioned policies) or frame (a decoder of another run's latents, with --from RUN).", metavar="MODEL", show_default=False)],
+    model: Annotated[str, typer.Argument(help="Model to train: lewm, pldm, prejepa, tdmpc2, dreamer, dummy (world models), gcbc, gcivl, gciql (goal-conditioned policies) or frame (a decoder of another run's latents, with --from RUN).", metavar="MODEL", show_default=False)],
     dataset: Annotated[str | None, typer.Option("--dataset", "-d", metavar="NAME", help="Dataset in the cache (see `swm list dataset`); a frame decoder defaults to its source run's.", show_default=False)] = None,
     preset: Annotated[str, typer.Option("--preset", metavar="PRESET", help="Sizes and recipe: tiny (CPU, minutes), small (GPU), paper (upstream's).")] = "tiny",
     steps: Annotated[int | None, typer.Option("--steps", parser=int_in(1), metavar="N", help="Optimizer steps (default: the preset's).", show_default=False)] = None,

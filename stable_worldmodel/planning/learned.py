@@ -45,7 +45,7 @@ class PlanSettings:
     latent distance to the goal has not improved by a typical step for ``patience`` env steps
     (default: half a horizon, ``horizon`` x the action block // 2, at least :data:`MIN_PATIENCE`;
     on upstream's TwoRoom with LeWM tiny: 12 steps 96%, 25 steps 92%, always waypoints 98%).
-    It needs what the graph needs (LeWM, PLDM or a PreJEPA without proprio, trained by
+    It needs what the graph needs (LeWM, PLDM, Dreamer or a PreJEPA without proprio, trained by
     ``swm train`` on a dataset still on disk) and is ``"none"`` elsewhere; the protocol that
     :func:`world_model_policy` returns records which."""
 
