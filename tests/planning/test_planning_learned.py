@@ -17,12 +17,8 @@ from stable_worldmodel.planning.learned import SOLVERS, PlanSettings, world_mode
 from stable_worldmodel.policy import RandomPolicy
 from stable_worldmodel.wm.preprocess import Normalizer
 
-TOY = "swm/Toy-v0"
-IMAGE = 16
-#: the goal disk painted in the background color: the pixels show only the agent. With the disk
-#: visible, a model trained for seconds spends its embedding on the (static) goal position and
-#: plans no better than random; the goal *image* still shows the agent at the goal.
-HIDDEN_GOAL = {keys.VARIATION_VALUES: {"goal.color": np.array([245, 245, 245], np.uint8)}}
+from _toy_home import HIDDEN_GOAL, IMAGE, TOY, toy_home
+
 #: a width-8 CNN LeWM at 16x16 with a one-layer predictor
 TINY = dict(
     image_size=IMAGE, embed_dim=16, cnn_width=8, depth=1, heads=2, dim_head=8, mlp_dim=32, projector_hidden=32,
@@ -35,24 +31,8 @@ EVAL_SEED = 10_000
 @pytest.fixture(scope="module")
 def home(tmp_path_factory):
     """A cache with dataset ``toy`` (160 expert episodes, 16x16) and checkpoints ``lewm`` / ``lewm-fs2``."""
-    from stable_worldmodel.envs import expert_policy
-    from stable_worldmodel.train import train
-
-    root = tmp_path_factory.mktemp("stablewm_learned")
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)  # reproducible floats (the planner test depends on them), and fast on busy CPUs
-    try:
-        with pytest.MonkeyPatch.context() as mp:
-            mp.setenv("STABLEWM_HOME", str(root))
-            with World(TOY, 4, (IMAGE, IMAGE), max_episode_steps=20, verbose=0, vectorization_mode="sync") as world:
-                world.set_policy(expert_policy(TOY))
-                world.record_dataset("toy", episodes=160, seed=0, options=HIDDEN_GOAL, cache_dir=root)
-            common = dict(device="cpu", seed=0, progress=False, cache_dir=str(root), log_every=100)
-            train("lewm", "toy", "tiny", steps=400, name="lewm", frameskip=1, **common, **TINY)
-            train("lewm", "toy", "tiny", steps=2, name="lewm-fs2", frameskip=2, **common, **TINY)
-        yield root
-    finally:
-        torch.set_num_threads(threads)
+    yield from toy_home(tmp_path_factory, "stablewm_learned", [
+        ("lewm", "lewm", dict(steps=400, frameskip=1, **TINY)), ("lewm", "lewm-fs2", dict(steps=2, frameskip=2, **TINY))])
 
 
 def toy_world(num_envs: int = 2, max_episode_steps: int = 30) -> World:
