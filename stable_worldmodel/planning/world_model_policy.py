@@ -166,9 +166,17 @@ class WorldModelPolicy(BasePolicy):
             self._next_init = None
         return restarted
 
+    def _last_frames(self, info_dict: Mapping[str, Any]) -> Mapping[str, Any]:
+        """The last ``history_len`` frames of World infos: their time axis is the length of
+        ``step_idx`` ``(B, T)``; infos without it are passed as they are."""
+        h, step = self.cfg.history_len, info_dict.get(keys.STEP_IDX)
+        t = step.shape[1] if getattr(step, "ndim", 0) == 2 else None
+        if t is None or t <= h:
+            return info_dict
+        return {k: v[:, -h:] if getattr(v, "ndim", 0) >= 2 and v.shape[1] == t else v for k, v in info_dict.items()}
+
     def _replan(self, info_dict: Mapping[str, Any]) -> None:
-        h = self.cfg.history_len
-        info_dict = {k: v[:, -h:] if getattr(v, "ndim", 0) >= 2 and v.shape[1] > h else v for k, v in info_dict.items()}
+        info_dict = self._last_frames(info_dict)
         info = prepare_info(info_dict, self.process, self.transform)
         if self.info_hook is not None:
             info = self.info_hook(info)

@@ -118,6 +118,9 @@ def test_the_model_gets_the_last_history_len_frames():
         got = solver.calls[0][0]
         assert got["state"].shape == (2, history, 3) and tuple(got["step_idx"].shape) == (2, history)
         np.testing.assert_array_equal(np.asarray(got["state"]), infos["state"][:, -history:])
+    policy, solver = make_policy(PlanConfig(horizon=2, receding_horizon=1))
+    policy.get_action({"state": infos["state"][:, 0]})  # (B, 3) without step_idx: not World infos, left whole
+    assert solver.calls[0][0]["state"].shape == (2, 3)
 
 
 class Scale:
