@@ -50,10 +50,10 @@ class WorldModelPolicy(BasePolicy):
 
     The model gets the last ``config.history_len`` frames of each info ``(B, T, ...)`` (a World
     with a longer ``history_size`` gives more; the rest are dropped: a model encoding more frames
-    than it was planned for would score the wrong action blocks). When an env starts a new episode mid-plan or at a
-    plan's end (its ``step_idx`` info is 0), every env replans without warm start, so no env
-    acts on, or starts from, a plan made for its previous episode; :meth:`reset_plan` forces
-    a replan too.
+    than it was planned for would score the wrong action blocks). When an env starts a new
+    episode mid-plan or at a plan's end (its ``step_idx`` info is 0), every env replans without
+    warm start, so no env acts on, or starts from, a plan made for its previous episode;
+    :meth:`reset_plan` forces a replan too.
     """
 
     def __init__(

@@ -204,6 +204,8 @@ def test_bad_inputs_raise_typed_errors(model):
         wm.get_config("dreamer", "tiny", reward_head="yes")
     with pytest.raises(ConfigError, match="min_std.*0"):
         wm.get_config("dreamer", "tiny", min_std=0.0)
+    with pytest.raises(ConfigError, match="decoder with an int image_size.*Identity"):
+        type(model)(model.encoder, nn.Identity(), model.rssm, A)
     with pytest.raises(UnknownNameError, match="'pixels'"):
         model.encode({})
     with pytest.raises(UnknownNameError, match="'goal'"):

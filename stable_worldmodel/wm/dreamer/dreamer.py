@@ -55,7 +55,9 @@ class Dreamer(nn.Module):
         self.embed_head = nn.Sequential(nn.Linear(f, f), nn.LayerNorm(f), nn.SiLU(), nn.Linear(f, rssm.embed_dim))
         self.reward = nn.Sequential(nn.Linear(f, f), nn.SiLU(), nn.Linear(f, 1)) if reward_head else None
         self.goal_cost = "final"  # see GOAL_COSTS; set by planning, not saved
-        size = int(getattr(decoder, "image_size", 0))
+        size = getattr(decoder, "image_size", None)
+        if not isinstance(size, int):
+            raise ConfigError(f"Dreamer requires a decoder with an int image_size (a FrameDecoder), got {type(decoder).__name__}")
         # the training frames' mean (fit_to_frames): the decoder learns what differs from it
         self.register_buffer("frame_mean", torch.zeros(int(getattr(decoder, "channels", 3)), size, size))
 
