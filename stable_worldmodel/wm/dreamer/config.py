@@ -33,7 +33,8 @@ class DreamerConfig(JEPAConfig):
     ``mlp_dim``, ``dropout``, ``projector_hidden``) are not used.
 
     Presets: ``tiny`` (64x64, ConvEncoder of width 8, deter 64, stoch 16, 5 frames per sample,
-    a 2-core CPU in minutes), ``small`` (64x64, width 32, deter 256, stoch 32: one GPU) and
+    2000 steps: about 4 minutes on a 2-core CPU; on TwoRoom its latent starts encoding the agent
+    after ~400 steps, and 1000 steps gave 42% or 70% depending on the run, 2000 gave 70% twice), ``small`` (64x64, width 32, deter 256, stoch 32: one GPU) and
     ``paper`` (64x64, width 64, deter 512, stoch 32, 16 frames per sample, batch 16, lr 1e-4).
     """
 
@@ -44,7 +45,7 @@ class DreamerConfig(JEPAConfig):
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "tiny": {
             "image_size": 64, "cnn_width": 8, "embed_dim": 64, "deter_dim": 64, "stoch_dim": 16, "hidden": 64,
-            "history_size": 4, "num_preds": 1, "batch_size": 16, "lr": 1e-3, "warmup_steps": 50, "steps": 1000,
+            "history_size": 4, "num_preds": 1, "batch_size": 16, "lr": 1e-3, "warmup_steps": 50, "steps": 2000,
         },
         "small": {
             "image_size": 64, "cnn_width": 32, "embed_dim": 256, "deter_dim": 256, "stoch_dim": 32, "hidden": 256,
