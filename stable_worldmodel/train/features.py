@@ -50,10 +50,10 @@ class FeatureCache:
 
 def fit_frozen_encoder(encoder: torch.nn.Module, dataset: Any, episodes: Any, cfg: Any, device: torch.device,
                        max_frames: int = 4096) -> bool:
-    """Fit a frozen encoder (or a model) that learns fixed statistics from data (one with ``fit_to_frames``,
-    e.g. :class:`~stable_worldmodel.wm.prejepa.module.BlurPatchEncoder`, also inside an
-    ``EvalOnly`` wrapper, or :class:`~stable_worldmodel.wm.dreamer.Dreamer`) on up to ``max_frames`` frames of ``episodes``, evenly spaced and
-    preprocessed as for training. Returns whether there was anything to fit. The fitted buffers
+    """Fit a frozen encoder (or a model) that learns fixed statistics from data (one with
+    ``fit_to_frames``, e.g. :class:`~stable_worldmodel.wm.prejepa.module.BlurPatchEncoder`, also
+    inside an ``EvalOnly`` wrapper, or :class:`~stable_worldmodel.wm.dreamer.Dreamer`) on up to
+    ``max_frames`` frames of ``episodes``, evenly spaced and preprocessed as for training. Returns whether there was anything to fit. The fitted buffers
     are part of the encoder's state dict, so the feature cache's fingerprint follows them."""
     target = getattr(encoder, "backbone", encoder)
     fit = getattr(target, "fit_to_frames", None)

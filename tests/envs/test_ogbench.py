@@ -370,8 +370,9 @@ def test_ogbench_floor_is_drawn_coarser_and_left_out_of_the_shadow_map_below_hig
     high.render()
     assert high._mjr._shadowless == frozenset() and meshes.PLANE_GRID["high"] is None  # upstream's picture
     high.close()
-    with pytest.raises(ConfigError, match="plane_grid > 0"):
-        meshes.render_mesh_model(cube._model, "<mujoco/>", {}, 0.1, plane_grid=0)
+    for bad in (0, "3cm"):
+        with pytest.raises(ConfigError, match="plane_grid > 0"):
+            meshes.render_mesh_model(cube._model, "<mujoco/>", {}, 0.1, plane_grid=bad)
 
 
 def test_ogbench_high_quality_keeps_exact_meshes_and_decimation_errors_are_typed(cube):

@@ -11,9 +11,9 @@ target. Quadric collapse alone stalls on some of these CAD meshes (at ratio 0.1 
 mount kept 54 % of its faces, an upper-arm part 89 %) and the decimated parts looked faceted;
 after the clustering every mesh reaches the target, and the picture is closer to the exact one
 (Cube, ``bench/bench_mujoco.py --picture``: MAD at 64x64 against ``"high"`` 0.67 instead of
-1.04, with the coarser floor below, at half the faces: 20.7k instead of 40.6k). The result only feeds the GL context (``MjRenderer(..., mesh_model=...)``):
-physics, collisions and the scene (poses, colours, lights) keep the exact model, so decimation
-changes pixels only.
+1.04, with the coarser floor below, at half the faces: 20.7k instead of 40.6k). The result only
+feeds the GL context (``MjRenderer(..., mesh_model=...)``): physics, collisions and the scene
+(poses, colours, lights) keep the exact model, so decimation changes pixels only.
 
 Which ``render_quality`` decimates (:data:`MESH_DETAIL`): ``"low"`` and ``"medium"``; ``"high"``
 keeps the exact meshes (upstream's picture, bit for bit).
@@ -138,7 +138,7 @@ def render_mesh_model(model, xml: str, assets: dict[str, bytes], ratio: float, c
     import mujoco
 
     ratio = check_ratio(ratio)
-    if plane_grid is not None and (isinstance(plane_grid, bool) or not float(plane_grid) > 0):
+    if plane_grid is not None and (isinstance(plane_grid, bool) or not isinstance(plane_grid, (int, float)) or not plane_grid > 0):
         raise ConfigError(f"render_mesh_model requires plane_grid > 0 (metres) or None, got {plane_grid!r}")
     spec = mujoco.MjSpec.from_string(xml, assets=assets)
     lighter = []
