@@ -1,8 +1,8 @@
 """Frozen image backbones by name: ``create_backbone(name, path=None, pretrained=True)``.
 
 The names are upstream 0.1.1's aliases (``dinov2_small`` -> ``facebook/dinov2-small`` ...)
-plus ``cnn``, our small patch CNN, and ``blur``, the blurred picture as patch tokens (no
-weights: the ``tiny`` preset's frozen encoder). Every backbone is called as
+plus ``cnn``, our small patch CNN, ``cnn_aa``, a random anti-aliased patch CNN (the ``tiny``
+preset's frozen encoder), and ``blur``, the blurred picture as patch tokens (no weights). Every backbone is called as
 ``backbone(pixels (N, C, h, w), [interpolate_pos_encoding=True])`` and returns
 ``last_hidden_state (N, 1 + P, D)`` (token 0 a CLS-like summary, then ``P`` patch tokens),
 except the ResNet family, which returns ``logits (N, D)`` (upstream's classifier head with
@@ -44,6 +44,7 @@ class BackboneSpec:
 # fmt: off
 BACKBONES: dict[str, BackboneSpec] = {
     "cnn":               BackboneSpec(None, "cnn", 0, 0),
+    "cnn_aa":            BackboneSpec(None, "cnn_aa", 0, 0),
     "blur":              BackboneSpec(None, "blur", 0, 0),
     "dinov2_small":      BackboneSpec("facebook/dinov2-small", "dinov2", 384, 14),
     "dinov2_base":       BackboneSpec("facebook/dinov2-base", "dinov2", 768, 14),
@@ -69,7 +70,7 @@ BACKBONES: dict[str, BackboneSpec] = {
 # fmt: on
 
 #: families built here without transformers or weights files (``config_overrides`` are constructor arguments)
-LOCAL_FAMILIES = ("cnn", "blur")
+LOCAL_FAMILIES = ("cnn", "cnn_aa", "blur")
 
 #: upstream's alias -> hub id table
 BACKBONE_ALIASES = {name: spec.hub_id for name, spec in BACKBONES.items() if spec.hub_id}
@@ -215,9 +216,10 @@ def create_backbone(
     alias = _resolve(name)
     spec = BACKBONES[alias]
     if spec.family in LOCAL_FAMILIES:
-        from .prejepa.module import BlurPatchEncoder, PatchConvEncoder
+        from .prejepa import module
 
-        return (PatchConvEncoder if spec.family == "cnn" else BlurPatchEncoder)(**config_overrides)
+        local = {"cnn": module.PatchConvEncoder, "cnn_aa": module.AntialiasedPatchCNN, "blur": module.BlurPatchEncoder}
+        return local[spec.family](**config_overrides)
     from .._optional import require
 
     transformers = require("transformers", extra="vit", purpose=f"the {alias} backbone")

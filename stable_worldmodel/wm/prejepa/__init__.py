@@ -9,6 +9,8 @@ _ATTRS = {
     "CausalPredictor": ".module",
     "Embedder": ".module",
     "PatchConvEncoder": ".module",
+    "AntialiasedPatchCNN": ".module",
+    "BlurPatchEncoder": ".module",
     "PreJEPAConfig": ".config",
     "create_backbone": "stable_worldmodel.wm.backbones",
     "BACKBONE_ALIASES": "stable_worldmodel.wm.backbones",

@@ -22,8 +22,9 @@ class PreJEPAConfig(JEPAConfig):
     Encoder (frozen): ``backbone`` (a name of :func:`~stable_worldmodel.wm.backbones.list_backbones`),
     ``pretrained`` (load its weights from ``backbone_path`` or ``$STABLEWM_HOME/backbones/``;
     never downloaded), ``backbone_overrides`` (transformers config fields of a randomly
-    initialised backbone). With ``backbone="cnn"``: ``embed_dim`` is the token width,
-    ``cnn_width`` the first conv's channels and ``cnn_grid`` the side of the patch grid. With
+    initialised backbone). With ``backbone="cnn"`` or ``"cnn_aa"`` (the random anti-aliased CNN,
+    :class:`~stable_worldmodel.wm.prejepa.module.AntialiasedPatchCNN`): ``embed_dim`` is the token
+    width, ``cnn_width`` the first conv's channels and ``cnn_grid`` the side of the patch grid. With
     ``backbone="blur"`` (:class:`~stable_worldmodel.wm.prejepa.module.BlurPatchEncoder`): the
     image blurred by ``blur_sigma`` pixels (0: ``image_size / 8``), pooled by ``blur_pool``, in
     ``cnn_grid`` x ``cnn_grid`` tokens (``embed_dim`` unused: the width follows).
@@ -33,11 +34,11 @@ class PreJEPAConfig(JEPAConfig):
     ``history_size`` frames. The inherited ``encoder``, ``vit_size``, ``vit_overrides``,
     ``patch_size`` and ``projector_hidden`` are not used.
 
-    Presets: ``tiny`` (64x64, the ``blur`` encoder with 4 tokens of 48 values (the 8x8 pooled
-    picture), one context frame, a 2-layer predictor: a CPU trains it in seconds from cached
-    features and plans in ~5 s per CEM plan of 10 envs; 16 tokens and 3 frames plan 9x slower;
-    a randomly initialised CNN or ViT there scores the agent's steps towards the goal no better
-    than chance), ``small`` (pretrained DINOv2 ViT-S/14 at
+    Presets: ``tiny`` (64x64, the randomly initialised anti-aliased CNN ``cnn_aa`` with 2 x 2
+    tokens of 64 values, one context frame, a 2-layer predictor: a CPU trains it in under a
+    minute from cached features and plans in ~5 s per CEM plan of 10 envs; 16 tokens and
+    3 frames plan 9x slower; a plain strided random CNN or ViT there scores the agent's steps
+    towards the goal no better than chance, see ``AntialiasedPatchCNN``), ``small`` (pretrained DINOv2 ViT-S/14 at
     112x112, 64 patches, a 4-layer predictor: one GPU) and ``paper`` (upstream's DINO-WM
     recipe: pretrained DINOv2 ViT-S/14 at 224x224, 256 patches, predictor depth 6 with 16
     heads of 64 and MLP 2048, action and proprio embeddings of 10, frameskip 5, history 3).
@@ -47,7 +48,7 @@ class PreJEPAConfig(JEPAConfig):
     target: ClassVar[str] = f"{_P}.prejepa.PreJEPA"
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "tiny": {
-            "backbone": "blur", "pretrained": False, "image_size": 64, "blur_pool": 8, "cnn_grid": 2,
+            "backbone": "cnn_aa", "pretrained": False, "image_size": 64, "cnn_width": 16, "embed_dim": 64, "cnn_grid": 2,
             "depth": 2, "heads": 4, "dim_head": 16, "mlp_dim": 128, "batch_size": 32, "lr": 1e-3, "warmup_steps": 50,
             "steps": 1000, "history_size": 1,
         },
@@ -109,7 +110,7 @@ class PreJEPAConfig(JEPAConfig):
     def encoder_dim(self) -> int:
         """Width ``Dv`` of the backbone's tokens."""
         spec = backbone_spec(self.backbone)
-        if spec.family == "cnn":
+        if spec.family in ("cnn", "cnn_aa"):
             return self.embed_dim
         if spec.family == "blur":
             return 3 * (self.image_size // (self.blur_pool * self.cnn_grid)) ** 2
@@ -129,9 +130,9 @@ class PreJEPAConfig(JEPAConfig):
 
     # -- the model as a _target_ tree -----------------------------------------------------------
     def encoder_tree(self) -> dict[str, Any]:
-        if self.backbone == "cnn":
-            backbone = {"name": "cnn", "image_size": self.image_size, "width": self.cnn_width, "hidden_size": self.embed_dim,
-                        "grid": self.cnn_grid}
+        if self.backbone in ("cnn", "cnn_aa"):
+            backbone = {"name": self.backbone, "image_size": self.image_size, "width": self.cnn_width,
+                        "hidden_size": self.embed_dim, "grid": self.cnn_grid}
         elif self.backbone == "blur":
             backbone = {"name": "blur", "image_size": self.image_size, "sigma": float(self.blur_sigma), "pool": self.blur_pool,
                         "grid": self.cnn_grid}
