@@ -35,7 +35,7 @@ from .goals import GoalConditioned, GoalSampler
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["TrainData", "split_episodes"]
+__all__ = ["TrainData", "extra_columns", "split_episodes"]
 
 
 def split_episodes(num_episodes: int, val_fraction: float, seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -47,6 +47,15 @@ def split_episodes(num_episodes: int, val_fraction: float, seed: int) -> tuple[n
         n_val = max(n_val, 1)
     n_val = min(n_val, num_episodes - 1)
     return np.sort(perm[n_val:]), np.sort(perm[:n_val])
+
+
+def extra_columns(cfg: Any) -> dict[str, int]:
+    """The dataset columns besides pixels and actions that a config's model reads, with their
+    widths: ``cfg.extra_columns`` when the config has it, else ``proprio`` when ``cfg.proprio_dim > 0``."""
+    columns = getattr(cfg, "extra_columns", None)
+    if columns is None:
+        columns = {keys.PROPRIO: cfg.proprio_dim} if getattr(cfg, "proprio_dim", 0) else {}
+    return {str(k): int(v) for k, v in dict(columns).items()}
 
 
 class TrainData:
@@ -72,7 +81,8 @@ class TrainData:
                 f"Datasets in {path.parent}: {', '.join(names) or '(none)'}"
             )
         self.dataset = HDF5Dataset(name, frameskip=cfg.frameskip, num_steps=cfg.num_steps, cache_dir=cache_dir)
-        self.extra_keys = [keys.PROPRIO] if getattr(cfg, "proprio_dim", 0) else []
+        self.extra_widths = extra_columns(cfg)
+        self.extra_keys = list(self.extra_widths)
         missing = [k for k in (keys.PIXELS, keys.ACTION, *self.extra_keys) if k not in self.dataset.column_names]
         if missing:
             raise DatasetFormatError(
@@ -98,12 +108,12 @@ class TrainData:
             raise ConfigError(f"Training requires {len(cfg.image_mean)}-channel images, got {shape[-1]} channels in {self.dataset.path}")
         self.image_shape = tuple(int(v) for v in shape)
         self.action_dim = int(np.prod(self.dataset.column_shape(keys.ACTION)[0]))
-        for key in self.extra_keys:
+        for key, expected in self.extra_widths.items():
             width = int(np.prod(self.dataset.column_shape(key)[0]))
-            if width != cfg.proprio_dim:
+            if width != expected:
                 raise ConfigError(
-                    f"Training requires proprio_dim equal to the width of column {key!r}, "
-                    f"got proprio_dim={cfg.proprio_dim} and {width} in {self.dataset.path}"
+                    f"Training requires {key}_dim equal to the width of column {key!r}, "
+                    f"got {key}_dim={expected} and {width} in {self.dataset.path}"
                 )
         self.train_episodes, self.val_episodes = split_episodes(self.dataset.num_episodes, cfg.val_fraction, seed)
         eps, _ = self.dataset._locate_many(np.arange(len(self.dataset), dtype=np.int64))
@@ -117,7 +127,10 @@ class TrainData:
                 "lower --frameskip / history or record longer episodes"
             )
         self.normalizer = self._fit_normalizer()
-        self.extra_normalizers = {key: self._fit_normalizer(key) for key in self.extra_keys}
+        self.extra_normalizers = {key: self._fit_normalizer(key) for key in self.extra_keys if not self._goal_of_extra(key)}
+        # goal_<k> is in the units of <k>: the same normalizer (planning falls back to it too, see prepare_info)
+        self.extra_normalizers.update({key: self.extra_normalizers[self._goal_of_extra(key)] for key in self.extra_keys
+                                       if self._goal_of_extra(key)})
         self._reward_cumsum = self._cumulative_rewards() if self.needs_reward else None
         self.features: np.ndarray | None = None  # frozen-encoder features per dataset row (use_features)
         self.goals = self._goal_samplers(cfg) if isinstance(cfg, GoalConditioned) else {}
@@ -132,6 +145,11 @@ class TrainData:
         if cfg.actor_goal_probabilities:
             samplers[f"actor_{goal_key}"] = GoalSampler(lengths, offsets, groups, cfg.actor_goal_probabilities, **common)
         return samplers
+
+    def _goal_of_extra(self, key: str) -> str | None:
+        """``k`` when ``key`` is ``goal_<k>`` and ``k`` is also an extra column, else None."""
+        base = key[len(keys.goal_key("")):] if key.startswith(keys.goal_key("")) else None
+        return base if base in self.extra_keys else None
 
     def _fit_normalizer(self, key: str = keys.ACTION) -> Normalizer:
         values = self.dataset.get_col_data(key).reshape(self.dataset.num_rows, -1)
@@ -256,6 +274,6 @@ class TrainData:
             "action_dim": self.action_dim,
             "normalizers": {
                 keys.ACTION: self.normalizer.to_dict(),
-                **{k: n.to_dict() for k, n in self.extra_normalizers.items()},
+                **{k: n.to_dict() for k, n in self.extra_normalizers.items() if not self._goal_of_extra(k)},
             },
         }

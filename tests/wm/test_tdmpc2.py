@@ -282,6 +282,49 @@ def test_missing_reward_column_says_how_to_record_one(_stablewm_home):
         assert part in message, (part, message)
 
 
+def test_goal_proprio_makes_it_goal_conditioned(_stablewm_home):
+    """With ``goal_proprio_dim`` the latent also encodes the episode's goal (``goal_proprio``
+    column): the trainer serves it normalized like ``proprio`` (the planner does the same), and
+    the latent depends on it."""
+    import json
+
+    from stable_worldmodel.train import train
+    from stable_worldmodel.train.data import TrainData
+
+    rng = np.random.default_rng(0)
+    n = 16
+    goal = np.repeat(np.array([[10.0, 20.0], [30.0, 40.0]], np.float32), n // 2, axis=0)
+    proprio = rng.normal(size=(n, 2)).astype(np.float32)
+    name = _write(_stablewm_home, "goals", {"pixels": rng.integers(0, 256, (n, IMAGE, IMAGE, 3), dtype=np.uint8),
+                                           "action": rng.normal(size=(n, A)).astype(np.float32), "proprio": proprio,
+                                           "goal_proprio": goal, "reward": -np.abs(proprio - goal).sum(1)})
+    net = {**NET, "proprio_dim": 2, "goal_proprio_dim": 2, "proprio_emb_dim": 8, "val_fraction": 0.0}
+    cfg = wm.get_config("tdmpc2", "tiny", **net)
+    assert cfg.extra_columns == {"proprio": 2, "goal_proprio": 2}
+    data = TrainData(name, cfg, seed=0, device=torch.device("cpu"))
+    out = data.batch(np.array([0, 9]))
+    assert out["goal_proprio"].shape == (2, 3, 2)
+    # in the units of proprio: normalized by proprio's normalizer, as planning does (prepare_info's fallback)
+    assert data.extra_normalizers["goal_proprio"] is data.extra_normalizers["proprio"]
+    expected = data.extra_normalizers["proprio"].transform(goal[[0, 9]])
+    assert_close(out["goal_proprio"][:, 0], torch.as_tensor(expected, dtype=torch.float32))
+    result = train("tdmpc2", name, steps=2, batch_size=4, device="cpu", progress=False, name="tdg", val_every=0, **net)
+    protocol = json.loads((result.folder / "protocol.json").read_text())
+    assert set(protocol["normalizers"]) == {"action", "proprio"}
+    model = wm.load_pretrained("tdg").eval()
+    assert list(model.extra_encoders) == ["proprio", "goal_proprio"] and model.latent_dim == 16 + 8 + 8
+    info = {keys.PIXELS: images(1, 1), keys.PROPRIO: randn(1, 1, 2)}
+    with pytest.raises(UnknownNameError, match="'goal_proprio'"):
+        model.get_action(info)
+    with torch.no_grad():
+        z = [model.encode({**info, "goal_proprio": torch.full((1, 1, 2), v)})["emb"] for v in (-1.0, 1.0)]
+    assert not torch.allclose(z[0], z[1])
+    with pytest.raises(ConfigError, match="goal_proprio_dim equal to the width of column 'goal_proprio'.*goal_proprio_dim=3 and 2"):
+        TrainData(name, wm.get_config("tdmpc2", "tiny", **{**net, "goal_proprio_dim": 3}), seed=0, device=torch.device("cpu"))
+    with pytest.raises(ConfigError, match="goal_proprio_dim to be an int >= 0"):
+        wm.get_config("tdmpc2", "tiny", goal_proprio_dim=-2)
+
+
 # -- bad inputs -------------------------------------------------------------------------------------
 def test_bad_inputs_raise_typed_errors(model):
     from stable_worldmodel.wm.tdmpc2 import SimNorm, TDMPC2

@@ -24,7 +24,11 @@ class TDMPC2Config(JEPAConfig):
     ``embed_dim`` (the latent ``L``, a multiple of ``simnorm_dim``), ``mlp_dim`` (dynamics, reward,
     policy and Q heads), ``num_q`` Q heads with ``q_dropout``, ``num_bins`` two-hot bins over
     ``[vmin, vmax]`` in symlog space, ``proprio_dim`` (numbers of the dataset's ``proprio``
-    column; 0: pixels only) encoded to ``proprio_emb_dim`` through a hidden ``enc_dim``.
+    column; 0: pixels only) encoded to ``proprio_emb_dim`` through a hidden ``enc_dim``, and
+    ``goal_proprio_dim`` (numbers of the ``goal_proprio`` column, the episode's goal; 0: none)
+    encoded the same way. TD-MPC2 plans on the reward it learned, so it reaches goals that change
+    per episode only when its latent holds the goal: with ``goal_proprio_dim`` it does (the
+    World gives ``goal_proprio`` to the planner as it gives ``proprio``).
     Loss: ``rho`` (step weight ``rho**t``), ``discount``, ``tau`` (EMA of the target Q heads and of
     the Q scale), ``entropy_coef``, ``consistency_coef``, ``reward_coef``, ``value_coef``.
     Planning: ``uncertainty_penalty`` (of the terminal Q), ``num_pi_trajs`` (prior samples averaged
@@ -75,6 +79,7 @@ class TDMPC2Config(JEPAConfig):
     simnorm_dim: int = 8
     proprio_dim: int = 0
     proprio_emb_dim: int = 32
+    goal_proprio_dim: int = 0
     rho: float = 0.5
     discount: float = 0.99
     tau: float = 0.01
@@ -101,15 +106,17 @@ class TDMPC2Config(JEPAConfig):
             value = getattr(self, key)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ConfigError(f"{name} requires {key} to be a positive int, got {value!r}")
-        if isinstance(self.proprio_dim, bool) or not isinstance(self.proprio_dim, int) or self.proprio_dim < 0:
-            raise ConfigError(f"{name} requires proprio_dim to be an int >= 0 (0: no proprio input), got {self.proprio_dim!r}")
+        for key in ("proprio_dim", "goal_proprio_dim"):
+            value = getattr(self, key)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+                raise ConfigError(f"{name} requires {key} to be an int >= 0 (0: no {key[:-4]} input), got {value!r}")
         if self.num_q < 2 or self.num_bins < 2 or not self.vmin < self.vmax:
             raise ConfigError(f"{name} requires num_q >= 2, num_bins >= 2 and vmin < vmax, "
                               f"got {self.num_q}, {self.num_bins}, {self.vmin}, {self.vmax}")
-        latent = self.embed_dim + (self.proprio_emb_dim if self.proprio_dim else 0)
+        latent = self.embed_dim + self.proprio_emb_dim * len(self.extra_columns)
         if latent % self.simnorm_dim:
-            raise ConfigError(f"{name} requires the latent width {latent} (embed_dim + proprio_emb_dim) to be a multiple of "
-                              f"simnorm_dim={self.simnorm_dim}")
+            raise ConfigError(f"{name} requires the latent width {latent} (embed_dim + proprio_emb_dim per extra input) to be "
+                              f"a multiple of simnorm_dim={self.simnorm_dim}")
         for key in ("rho", "discount", "tau"):
             value = getattr(self, key)
             if not 0.0 < value <= 1.0:
@@ -118,13 +125,18 @@ class TDMPC2Config(JEPAConfig):
             raise ConfigError(f"{name} requires image_size >= 35 with pixel_encoder 'tdmpc2' (upstream's CNN), "
                               f"got {self.image_size}; use 'conv'")
 
+    @property
+    def extra_columns(self) -> dict[str, int]:
+        """The dataset columns the model encodes besides pixels, with their widths."""
+        widths = {keys.PROPRIO: self.proprio_dim, keys.goal_key(keys.PROPRIO): self.goal_proprio_dim}
+        return {key: width for key, width in widths.items() if width}
+
     def target_tree(self, action_dim: int) -> dict[str, Any]:
         """The ``_target_`` tree of the model for env actions of ``action_dim`` numbers: upstream's
         ``TDMPC2(cfg)`` with ``cfg`` as a plain mapping."""
         encoding = {keys.PIXELS: self.embed_dim}
-        extra_dims = {}
-        if self.proprio_dim:
-            encoding[keys.PROPRIO], extra_dims[keys.PROPRIO] = self.proprio_emb_dim, self.proprio_dim
+        extra_dims = self.extra_columns
+        encoding.update({key: self.proprio_emb_dim for key in extra_dims})
         wm = {
             "encoding": encoding, "encoder": self.pixel_encoder, "num_channels": self.num_channels, "cnn_width": self.cnn_width,
             "enc_dim": self.enc_dim, "mlp_dim": self.mlp_dim, "num_bins": self.num_bins, "vmin": self.vmin, "vmax": self.vmax,
