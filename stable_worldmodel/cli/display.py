@@ -250,6 +250,24 @@ def display_model_info(info: dict[str, Any]) -> None:
     console().print(Panel(Group(*parts), title=f"[bold]model[/] {info.get('name', '?')}", expand=False))
 
 
+def display_model_type_info(info: dict[str, Any]) -> None:
+    """Print a panel with a model type's config class, summary, policy prefix, presets and
+    config fields with their defaults (``info`` from
+    :func:`stable_worldmodel.cli.resources.model_type_info`)."""
+    rows: list[tuple[str, Any]] = [
+        ("config", info["config"]), ("train", f"swm train {info['name']} --dataset NAME [--preset P] [--set KEY=VALUE]"),
+        ("evaluate", f"swm eval ENV --policy {info['policy']}"), ("needs reward", "yes" if info["needs_reward"] else "no"),
+    ]
+    presets = Table(title="Presets (the fields each sets)", title_justify="left", box=None, pad_edge=False, show_header=False)
+    presets.add_column(style="bold cyan")
+    presets.add_column()
+    for name, values in info["presets"].items():
+        presets.add_row(name, Text(", ".join(f"{k}={v!r}" for k, v in values.items())))
+    fields = _kv_table("Fields (defaults)", [(name, Text(repr(value))) for name, value in info["fields"]])
+    parts: list[Any] = [Text(info["summary"]), Text(""), _kv_table("Overview", rows), Text(""), presets, Text(""), fields]
+    console().print(Panel(Group(*parts), title=f"[bold]model type[/] {info['name']}", expand=False))
+
+
 def names_table(title: str, names: Sequence[str], note: str | None = None) -> None:
     """Print ``title (count) in note`` and a one-column table of ``names`` (or a note that there are none)."""
     out = console()

@@ -9,6 +9,7 @@ to that folder; ``weights.pt`` + ``config.json`` [+ ``protocol.json``], see
 from __future__ import annotations
 
 import json
+import re
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Annotated, Any
@@ -142,10 +143,42 @@ def pickled_info(name: str, files: Sequence[Path]) -> dict[str, Any]:
     }
 
 
+def model_type_info(name: str) -> dict[str, Any]:
+    """What ``swm show model`` prints for a registered model type (``swm train NAME``): its config
+    class, what it is evaluated with, its presets (the fields each sets) and every config field
+    with its default."""
+    import dataclasses
+
+    from ..wm import get_config_class
+
+    cls = get_config_class(name)
+    doc = (cls.__doc__ or "").strip().split("\n\n")[0]
+    doc = re.sub(r":\w+:`~?(?:[\w.]*\.)?([^`.]+)`", r"\1", doc).replace("``", "")  # reST roles -> plain names
+    def default(f: dataclasses.Field) -> Any:  # read off the class: some configs need a field set to build
+        if f.default is not dataclasses.MISSING:
+            return f.default
+        return f.default_factory() if f.default_factory is not dataclasses.MISSING else "(required)"
+
+    fields = [(f.name, default(f)) for f in dataclasses.fields(cls) if f.init]
+    return {
+        "name": name,
+        "config": f"{cls.__module__}.{cls.__qualname__}",
+        "summary": " ".join(doc.split()),
+        "policy": f"{cls.eval_prefix}:RUN",
+        "needs_reward": bool(getattr(cls, "needs_reward", False)),
+        "presets": {preset: dict(values) for preset, values in cls.presets.items()},
+        "fields": fields,
+    }
+
+
 def model_infos(name: str) -> list[dict[str, Any]]:
-    """One info dict per layout that holds model ``name`` (checkpoint folder first)."""
+    """One info dict per layout that holds model ``name`` (checkpoint folder first), and the
+    model type's when ``name`` is a registered model type (``lewm``, ``tdmpc2`` ...)."""
+    from ..wm import list_models
+
     folder, files = _checkpoint_folder(name), _pickled_files(name)
-    return ([checkpoint_info(name, folder)] if folder else []) + ([pickled_info(name, files)] if files else [])
+    infos = ([checkpoint_info(name, folder)] if folder else []) + ([pickled_info(name, files)] if files else [])
+    return infos + ([model_type_info(name)] if name in list_models() else [])
 
 
 def delete_model(name: str) -> list[Path]:
@@ -186,6 +219,12 @@ def list_cmd(kind: Annotated[str, typer.Argument(help="What to list: model, data
     note = None if kind == "world" else str(get_cache_dir())
     title = {"model": "Cached models", "dataset": "Cached datasets", "world": "Worlds"}[kind]
     names_table(title, sorted(_lister(kind)()), note)
+    if kind == "model":
+        from ..wm import list_models
+        from .display import console
+
+        console().print(f"[bold]Model types[/] (swm train MODEL; swm show model MODEL for presets and fields): "
+                        f"{', '.join(list_models())}", soft_wrap=True)
     if kind == "dataset":
         from ..data.info import leftover_partials
         from .display import console
@@ -199,18 +238,23 @@ def show(
     names: Annotated[list[str] | None, typer.Argument(help="Names to show (see `swm list KIND`).", metavar="NAMES...", show_default=False)] = None,
     all: Annotated[bool, typer.Option("--all", "-a", help="Show every cached model / dataset / registered world.")] = False,  # noqa: A002 (seed name)
 ) -> None:
-    """Show the files, model class, parameter count and training protocol of models, the columns,
-    counts, shapes and factors of datasets, or the spaces and factors of worlds.
+    """Show the files, model class, parameter count and training protocol of models (the presets
+    and config fields of a model type), the columns, counts, shapes and factors of datasets, or
+    the spaces and factors of worlds.
 
-    Example: swm show model pusht-lewm; swm show dataset tworoom-v1-expert; swm show world swm/TwoRoom-v2
+    Example: swm show model pusht-lewm; swm show model tdmpc2; swm show dataset tworoom-v1-expert; swm show world swm/TwoRoom-v2
     """
     from ..data import dataset_info, world_info
-    from .display import display_dataset_info, display_model_info, display_world_info
+    from .display import display_dataset_info, display_model_info, display_model_type_info, display_world_info
 
     kind = check_choice("kind", kind, ("model", "dataset", "world"), ALIASES)
     known = sorted(_lister(kind)())
     if all:
         names = known
+    if kind == "model":  # a model type (swm train MODEL) shows its presets and fields
+        from ..wm import list_models
+
+        known = sorted({*known, *list_models()})
     elif not names:
         raise ConfigError(f"swm show {kind} requires NAMES or --all, got neither (known: {', '.join(known) or 'none'})")
     if kind == "dataset":  # one shard of a sharded dataset shows too
@@ -220,7 +264,7 @@ def show(
     _check_names(kind, names, known)
     if kind == "model":
         for info in [info for name in names for info in model_infos(name)]:  # read all before printing
-            display_model_info(info)
+            (display_model_type_info if "fields" in info else display_model_info)(info)
         return
     info, display = (dataset_info, display_dataset_info) if kind == "dataset" else (world_info, display_world_info)
     for name in names:

@@ -20,6 +20,20 @@ def _float_pos(value: str) -> float:
     return number
 
 
+def _config_override(value: str) -> tuple[str, object]:
+    """``KEY=VALUE`` -> ``(KEY, VALUE)``, the value read as JSON when it parses (``2``, ``true``,
+    ``[1, 2]``), else kept as a string."""
+    import json
+
+    key, sep, raw = value.partition("=")
+    if not sep or not key.strip():
+        raise typer.BadParameter(f"requires KEY=VALUE (a config field of the model, e.g. proprio_dim=2), got {value!r}")
+    try:
+        return key.strip(), json.loads(raw)
+    except json.JSONDecodeError:
+        return key.strip(), raw
+
+
 def train_cmd(
     model: Annotated[str, typer.Argument(help="Model to train: lewm, pldm, prejepa, tdmpc2, dreamer, dummy (world models), gcbc, gcivl, gciql (goal-conditioned policies) or frame (a decoder of another run's latents, with --from RUN).", metavar="MODEL", show_default=False)],
     dataset: Annotated[str | None, typer.Option("--dataset", "-d", metavar="NAME", help="Dataset in the cache (see `swm list dataset`); a frame decoder defaults to its source run's.", show_default=False)] = None,
@@ -35,10 +49,12 @@ def train_cmd(
     resume: Annotated[bool, typer.Option("--resume", help="Continue the run RUN from its last checkpoint.")] = False,
     frameskip: Annotated[int | None, typer.Option("--frameskip", parser=int_in(1), metavar="K", help="Env steps per model step (the action block).", show_default=False)] = None,
     source: Annotated[str | None, typer.Option("--from", metavar="RUN", help="frame only: the run whose latents the decoder learns to turn into frames (run name default: RUN-frame).", show_default=False)] = None,
+    settings: Annotated[list[str] | None, typer.Option("--set", metavar="KEY=VALUE", help="A config field of the model (repeatable), e.g. --set proprio_dim=2; VALUE is read as JSON when it parses (see `swm show model MODEL` for the fields).", show_default=False)] = None,
 ) -> None:
     """Train MODEL on a recorded dataset; the checkpoint goes to $STABLEWM_HOME/checkpoints/RUN.
 
     Example: swm train lewm --dataset tworoom --preset tiny --name tr-lewm
+    (any config field: --set KEY=VALUE, e.g. swm train tdmpc2 --dataset tr2 --set proprio_dim=2 --set goal_proprio_dim=2)
     (then: swm eval swm/TwoRoom-v2 --policy wm:tr-lewm; a gcbc / gcivl / gciql run: --policy gc:RUN;
     swm train frame --from tr-lewm trains the decoder that swm eval --video shows the predictions with).
     Several processes (DDP; --batch-size is the global batch): torchrun --nproc-per-node N -m stable_worldmodel.cli train ...
@@ -50,7 +66,9 @@ def train_cmd(
     from ..wm import get_config_class
     from .display import console
 
-    overrides = {"frameskip": frameskip} if frameskip is not None else {}
+    overrides = dict(_config_override(item) for item in settings or [])
+    if frameskip is not None:
+        overrides["frameskip"] = frameskip
     if source is not None:
         overrides["source"] = source
     if dataset is None and source is None:

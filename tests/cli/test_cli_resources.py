@@ -176,6 +176,29 @@ def test_show_unknown_model_suggests(swm, error_line, checkpoint):
     assert "'runz'" in line and "Did you mean 'runx'" in line
 
 
+def test_list_models_names_the_model_types(swm):
+    result = swm("list", "model")
+    assert result.exit_code == 0
+    assert "Model types" in result.stdout
+    for name in ("lewm", "pldm", "prejepa", "tdmpc2", "dreamer", "gcbc", "frame"):
+        assert name in result.stdout
+
+
+def test_show_model_type_gives_presets_and_fields(swm):
+    result = swm("show", "model", "tdmpc2")
+    assert result.exit_code == 0, result.output
+    out = " ".join(result.stdout.split())
+    assert "model type tdmpc2" in out and "TDMPC2Config" in out and "needs reward yes" in out
+    assert "swm eval ENV --policy wm:RUN" in out and "--set KEY=VALUE" in out
+    assert "tiny pixel_encoder='conv'" in out and "paper" in out  # each preset with the fields it sets
+    assert "goal_proprio_dim 0" in out and "num_q 5" in out  # every field with its default
+    assert ":class:" not in out and "``" not in out  # the docstring's reST is plain text
+    gc = swm("show", "model", "gcbc", "frame")  # configs that cannot be built bare still show their defaults
+    assert gc.exit_code == 0, gc.output
+    assert "model type gcbc" in gc.stdout and "policy gc:RUN" in " ".join(gc.stdout.split())
+    assert "model type frame" in gc.stdout and "source" in gc.stdout
+
+
 # -- delete ------------------------------------------------------------------------------
 def test_delete_confirm_yes(swm, two_datasets):
     result = swm("delete", "dataset", "alpha", input="y\n")

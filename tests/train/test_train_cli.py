@@ -59,6 +59,14 @@ def test_epochs_bound_the_run(swm, toy):
     assert f": {math.ceil(1.5 * num_train / 8)} steps in " in result.stdout
 
 
+def test_set_overrides_config_fields(swm, toy, _stablewm_home):
+    result = swm("train", "dummy", "--dataset", toy, "--steps", "2", "--name", "r", *QUICK, "--set", "embed_dim=12",
+                 "--set", "image_mean=[0.4, 0.4, 0.4]")
+    assert result.exit_code == 0, result.output
+    config = json.loads((_stablewm_home / "checkpoints" / "r" / "protocol.json").read_text())["config"]
+    assert config["embed_dim"] == 12 and list(config["image_mean"]) == [0.4, 0.4, 0.4]
+
+
 def test_unknown_model_is_one_line_naming_the_close_one(swm, toy, error_line, _stablewm_home):
     result = swm("train", "lewn", "--dataset", toy)
     assert result.exit_code == 1
@@ -85,6 +93,8 @@ def test_unknown_dataset_is_one_line_naming_the_cached_ones(swm, toy, error_line
         (("--epochs", "0"), 2, "'--epochs': requires a number > 0, got '0'"),
         (("--lr", "-1"), 2, "'--lr': requires a number > 0, got '-1'"),
         (("--frameskip", "x"), 2, "'--frameskip'"),
+        (("--set", "lr"), 2, "requires KEY=VALUE (a config field of the model, e.g. proprio_dim=2), got 'lr'"),
+        (("--set", "embed_dimm=8"), 1, "DummyConfig has no field 'embed_dimm'. Did you mean one of 'embed_dim'"),
     ],
     ids=lambda v: " ".join(v) if isinstance(v, tuple) else None,
 )
