@@ -2,13 +2,14 @@
 evaluate on the same seeds; prints a markdown table (training time, plan time, success and its 95% interval).
 
 Usage: python bench/bench_models_tworoom.py [--env swm/TwoRoom-v1] [--models lewm pldm prejepa gcbc dreamer]
-       [--episodes 300] [--eval-episodes 50] [--num-envs 10] [--seed 5000] [--steps N]
+       [--episodes 300] [--eval-episodes 50] [--num-envs 10] [--seed 5000] [--steps N] [--set KEY=VALUE ...]
 Runs in a scratch $STABLEWM_HOME unless --keep; never asserts. On a 2-core CPU each model takes 3-8 minutes.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import tempfile
 import time
@@ -30,10 +31,11 @@ def run(args: argparse.Namespace) -> list[dict]:
     rows = []
     for model in args.models:
         start = time.perf_counter()
-        result = train(model, "bench", "tiny", steps=args.steps, name=f"bench-{model}", seed=0, progress=False)
+        result = train(model, "bench", "tiny", steps=args.steps, name=f"bench-{model}", seed=0, progress=False, **args.set)
         trained = time.perf_counter() - start
         prefix = get_config_class(model).eval_prefix
-        plan = PlanSettings(seed=args.seed) if prefix == "wm" else None
+        # TD-MPC2 plans with MPPI, its own planner (and on its own reward and value)
+        plan = PlanSettings(seed=args.seed, **({"solver": "mppi"} if model == "tdmpc2" else {})) if prefix == "wm" else None
         policy = f"{prefix}:bench-{model}"
         # the frames of history `swm eval` gives the policy: 1 for a planner (it encodes the current frame)
         with make_world(args.env, args.num_envs, 64, limit, seed=args.seed, history_size=policy_history(policy)) as world:
@@ -42,10 +44,22 @@ def run(args: argparse.Namespace) -> list[dict]:
             evaluated = time.perf_counter() - start
         steps = int(sum(results["episode_lengths"]))
         summary = SuccessSummary.from_results(model, results)
-        rows.append({"model": model, "collect_s": collect, "train_s": trained, "eval_s": evaluated,
+        metrics = (result.folder / "metrics.jsonl").read_text().splitlines()
+        val = [r["val/loss"] for r in map(json.loads, metrics) if "val/loss" in r]
+        rows.append({"model": model, "collect_s": collect, "train_s": trained, "eval_s": evaluated, "val_loss": val,
                      "ms_per_step": 1000 * evaluated * args.num_envs / max(1, steps), "summary": summary})
         print_row(rows[-1], flush=True)
     return rows
+
+
+def _override(item: str, parser: argparse.ArgumentParser) -> tuple[str, object]:
+    key, sep, value = item.partition("=")
+    if not sep or not key:
+        parser.error(f"--set takes KEY=VALUE, got {item!r}")
+    try:
+        return key, json.loads(value)
+    except json.JSONDecodeError:
+        return key, value
 
 
 def print_row(row: dict, flush: bool = False) -> None:
@@ -65,18 +79,25 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=5000)
     parser.add_argument("--steps", type=int, default=None, help="training steps (default: each preset's)")
     parser.add_argument("--keep", action="store_true", help="use $STABLEWM_HOME instead of a scratch folder")
+    parser.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE",
+                        help="config overrides for every model trained, VALUE read as JSON when it parses (e.g. embed_dim=64)")
     args = parser.parse_args()
+    args.set = dict(_override(item, parser) for item in args.set)
     print(f"{args.env}: {args.episodes} expert episodes, tiny presets, {args.eval_episodes} evaluation episodes "
           f"(seeds {args.seed}..), {args.num_envs} envs, this machine; world models plan with PlanSettings() "
-          f"(CEM 300 x 30, horizon 5, subgoals 'auto': the training data's waypoints once an episode stalls)")
+          f"(CEM 300 x 30, horizon 5, subgoals 'auto': the training data's waypoints once an episode stalls; "
+          f"TD-MPC2: MPPI on its own reward and value){'; config overrides ' + json.dumps(args.set) if args.set else ''}")
     print("| model | training | plan time per env step | success (95% CI) | collect + train + eval |")
     print("| --- | ---: | ---: | ---: | ---: |")
     if args.keep:
-        run(args)
-        return
-    with tempfile.TemporaryDirectory() as home:
-        os.environ["STABLEWM_HOME"] = home
-        run(args)
+        rows = run(args)
+    else:
+        with tempfile.TemporaryDirectory() as home:
+            os.environ["STABLEWM_HOME"] = home
+            rows = run(args)
+    for row in rows:
+        val = row["val_loss"]
+        print(f"{row['model']}: validation loss {val[0]:.4g} -> {val[-1]:.4g}" if val else f"{row['model']}: no validation loss")
 
 
 if __name__ == "__main__":
