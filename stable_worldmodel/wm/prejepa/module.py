@@ -238,10 +238,10 @@ class BlurPatchEncoder(_StandardizedTokens):
 
     The image is blurred with a Gaussian of ``sigma`` pixels (0: ``image_size / 8``), average-pooled
     by ``pool`` and cut into ``grid`` x ``grid`` cells, each cell's values a token. Distances between
-    such features grow smoothly with how far apart small objects are, which a randomly
+    such features grow smoothly with how far apart small objects are, which a plain randomly
     initialised CNN or ViT does not give (their feature distance is about as likely to fall as to
-    rise when the agent steps towards the goal): it is the encoder of the ``tiny`` preset, where
-    no pretrained DINOv2 can be had.
+    rise when the agent steps towards the goal). It was the ``tiny`` preset's encoder before
+    :class:`AntialiasedPatchCNN`, which plans better on TwoRoom (90% against 82%).
 
     :meth:`fit_to_frames` standardizes each token value by its mean and spread over training
     frames (see :class:`_StandardizedTokens`).
@@ -249,9 +249,7 @@ class BlurPatchEncoder(_StandardizedTokens):
 
     def __init__(self, image_size: int = 64, in_channels: int = 3, sigma: float = 0.0, pool: int = 8, grid: int = 2):
         super().__init__()
-        for key, value in (("image_size", image_size), ("in_channels", in_channels), ("pool", pool), ("grid", grid)):
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ConfigError(f"BlurPatchEncoder requires {key} to be a positive int, got {value!r}")
+        _positive_ints("BlurPatchEncoder", image_size=image_size, in_channels=in_channels, pool=pool, grid=grid)
         if isinstance(sigma, bool) or not isinstance(sigma, (int, float)) or sigma < 0:
             raise ConfigError(f"BlurPatchEncoder requires sigma >= 0 (pixels; 0: image_size / 8), got {sigma!r}")
         if image_size % (pool * grid):
@@ -331,6 +329,7 @@ class AntialiasedPatchCNN(_StandardizedTokens):
         for stage in self.stages:
             x = stage(x)
             c = x.shape[1]
-            kernel = (self.taps[:, None] * self.taps[None, :]).expand(c, 1, -1, -1)
+            taps = self.taps.to(x.dtype)
+            kernel = (taps[:, None] * taps[None, :]).expand(c, 1, -1, -1)
             x = F.conv2d(F.pad(x, (r, r, r, r), mode="replicate"), kernel, stride=2, groups=c)
         return self.head(x).flatten(2).transpose(1, 2)
