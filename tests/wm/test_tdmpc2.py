@@ -146,7 +146,7 @@ def test_loss_terms(model):
     assert all(not p.requires_grad for p in model.target_qs.parameters())
     # the policy term gives the Q heads no gradient: only the value term does
     model.zero_grad()
-    model._pi_loss(randn(4, 2, L).softmax(-1)).backward()
+    model._pi_loss(randn(4, 2, L).softmax(-1), randn(4, 2, A)).backward()
     assert all(p.grad is None for p in model.qs.parameters())
     assert any(p.grad is not None for p in model.pi.parameters())
     # in training mode each loss call moves the target heads by tau (0.01) towards the heads
@@ -161,6 +161,38 @@ def test_loss_terms(model):
     with torch.no_grad():
         model.eval().loss(batch())  # evaluation leaves them alone
     assert all(torch.equal(a, b) for a, b in zip(moved, model.target_qs.parameters()))
+
+
+def test_bc_coef_makes_the_prior_imitate_the_data():
+    """``bc_coef`` adds ``bc_coef * |tanh mean - clip(action)|^2`` (rho-weighted over steps) to the
+    policy term; trained on it, the prior's mean action moves to the batch's actions."""
+    zs, acts = randn(4, 2, L).softmax(-1), randn(4, 2, A) * 2  # some beyond [-1, 1]: clipped
+    plain, bc = make(), make(bc_coef=3.0)
+    torch.manual_seed(0)
+    base = plain._pi_loss(zs, acts)
+    torch.manual_seed(0)
+    with_bc = bc._pi_loss(zs, acts)
+    mean_action = torch.tanh(bc.pi(zs).chunk(2, dim=-1)[0])
+    per_step = (mean_action - acts.clamp(-1, 1)).square().mean(-1).mean(0)  # (H,)
+    expected = (per_step * torch.tensor([1.0, 0.5])).mean() * 3.0  # rho = 0.5
+    assert_close(with_bc - base, expected, atol=1e-5, rtol=1e-4)
+
+    target = acts.clamp(-1, 1)
+    gaps = {}
+    for coef in (0.0, 3.0):  # the prior alone, trained on its term at fixed latents
+        model = make(bc_coef=coef).train()
+        opt = torch.optim.Adam(model.pi.parameters(), lr=3e-3)
+        torch.manual_seed(0)
+        for _ in range(60):
+            loss = model._pi_loss(zs, acts)
+            opt.zero_grad()
+            loss.backward()
+            opt.step()
+        with torch.no_grad():
+            gaps[coef] = float((torch.tanh(model.pi(zs).chunk(2, dim=-1)[0]) - target).abs().mean())
+    assert gaps[3.0] < 0.5 * gaps[0.0], gaps  # 0.20 vs 0.80 here
+    with pytest.raises(ConfigError, match="bc_coef >= 0"):
+        wm.get_config("tdmpc2", "tiny", bc_coef=-1.0)
 
 
 def test_loss_decreases():

@@ -30,7 +30,10 @@ class TDMPC2Config(JEPAConfig):
     per episode only when its latent holds the goal: with ``goal_proprio_dim`` it does (the
     World gives ``goal_proprio`` to the planner as it gives ``proprio``).
     Loss: ``rho`` (step weight ``rho**t``), ``discount``, ``tau`` (EMA of the target Q heads and of
-    the Q scale), ``entropy_coef``, ``consistency_coef``, ``reward_coef``, ``value_coef``.
+    the Q scale), ``entropy_coef``, ``consistency_coef``, ``reward_coef``, ``value_coef``, ``bc_coef``
+    (0: upstream's loss; > 0: the prior also imitates the dataset's actions, as in TD3+BC: with
+    offline data, a prior that maximises Q alone picks actions the data never shows, where Q is
+    extrapolated).
     Planning: ``uncertainty_penalty`` (of the terminal Q), ``num_pi_trajs`` (prior samples averaged
     by ``get_action``). Data: one frame of context (``history_size`` must be 1) and ``num_preds``
     transitions per sample (upstream's ``horizon``); ``reward[:, t]`` is the sum of the
@@ -87,6 +90,7 @@ class TDMPC2Config(JEPAConfig):
     consistency_coef: float = 20.0
     reward_coef: float = 0.1
     value_coef: float = 0.1
+    bc_coef: float = 0.0
     uncertainty_penalty: float = 0.5
     num_pi_trajs: int = 1
     num_preds: int = 3
@@ -117,6 +121,8 @@ class TDMPC2Config(JEPAConfig):
         if latent % self.simnorm_dim:
             raise ConfigError(f"{name} requires the latent width {latent} (embed_dim + proprio_emb_dim per extra input) to be "
                               f"a multiple of simnorm_dim={self.simnorm_dim}")
+        if isinstance(self.bc_coef, bool) or not isinstance(self.bc_coef, (int, float)) or self.bc_coef < 0:
+            raise ConfigError(f"{name} requires bc_coef >= 0 (0: upstream's loss), got {self.bc_coef!r}")
         for key in ("rho", "discount", "tau"):
             value = getattr(self, key)
             if not 0.0 < value <= 1.0:
@@ -142,7 +148,7 @@ class TDMPC2Config(JEPAConfig):
             "enc_dim": self.enc_dim, "mlp_dim": self.mlp_dim, "num_bins": self.num_bins, "vmin": self.vmin, "vmax": self.vmax,
             "num_q": self.num_q, "simnorm_dim": self.simnorm_dim, "q_dropout": self.q_dropout, "tau": self.tau, "rho": self.rho,
             "discount": self.discount, "entropy_coef": self.entropy_coef, "consistency_coef": self.consistency_coef,
-            "reward_coef": self.reward_coef, "value_coef": self.value_coef, "horizon": self.num_preds,
+            "reward_coef": self.reward_coef, "value_coef": self.value_coef, "bc_coef": self.bc_coef, "horizon": self.num_preds,
             "uncertainty_penalty": self.uncertainty_penalty,
         }
         cfg = {"image_size": self.image_size, "action_dim": self.frameskip * int(action_dim), "extra_dims": extra_dims,

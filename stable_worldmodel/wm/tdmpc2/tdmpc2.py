@@ -38,12 +38,13 @@ EMB, PREDICTED_EMB, PREDICTED_REWARD = "emb", "predicted_emb", "predicted_reward
 PIXEL_ENCODERS = ("tdmpc2", "conv")
 
 #: ``cfg["wm"]`` keys and their defaults (upstream's names; ``encoder``, ``cnn_width``,
-#: ``num_channels`` and ``q_dropout`` are ours: upstream always builds its 32-channel CNN)
+#: ``num_channels`` and ``q_dropout`` are ours: upstream always builds its 32-channel CNN; so is
+#: ``bc_coef``, 0 for upstream's loss)
 WM_DEFAULTS: dict[str, Any] = {
     "encoding": {keys.PIXELS: 512}, "encoder": "tdmpc2", "num_channels": 32, "cnn_width": 16, "enc_dim": 256,
     "mlp_dim": 512, "num_bins": 101, "vmin": -10.0, "vmax": 10.0, "num_q": 5, "simnorm_dim": 8, "q_dropout": 0.01,
     "tau": 0.01, "rho": 0.5, "discount": 0.99, "entropy_coef": 1e-4, "consistency_coef": 20.0, "reward_coef": 0.1,
-    "value_coef": 0.1, "horizon": 3, "uncertainty_penalty": 0.5,
+    "value_coef": 0.1, "horizon": 3, "uncertainty_penalty": 0.5, "bc_coef": 0.0,
 }
 
 
@@ -321,7 +322,10 @@ class TDMPC2(nn.Module):
         - ``value_loss``: two-hot cross-entropy of every Q head against ``r + discount * min`` of
           two random EMA heads at the next encoded frame and a prior action (averaged over heads);
         - ``pi_loss``: ``-(Q / scale + entropy_coef * entropy)`` of the prior on detached latents
-          (Q: the mean of two random heads, which this term does not train).
+          (Q: the mean of two random heads, which this term does not train), plus, with
+          ``bc_coef > 0``, ``bc_coef`` times the squared distance of the prior's mean action to the
+          batch's (TD3+BC's remedy for offline data: the prior, whose actions the value targets and
+          the planner's terminal value use, stays where the data has actions).
 
         ``loss = consistency_coef * consistency + reward_coef * reward + value_coef * value + pi``;
         ``model_loss`` is ``loss`` without ``pi`` (the world model's part, which the trainer
@@ -356,7 +360,7 @@ class TDMPC2(nn.Module):
             z, logits = self.dynamics(za), self.reward(za)
             reward_loss = reward_loss + weight * self._two_hot_ce(logits, reward[:, t]).mean()
             consistency = consistency + weight * F.mse_loss(z, target_z[:, t])
-        pi_loss = self._pi_loss(torch.stack(latents, dim=1).detach())
+        pi_loss = self._pi_loss(torch.stack(latents, dim=1).detach(), action[:, :horizon])
         consistency, reward_loss = consistency / horizon, reward_loss / horizon
         value_loss = value_loss / (horizon * wm["num_q"])
         total = wm["consistency_coef"] * consistency + wm["reward_coef"] * reward_loss + wm["value_coef"] * value_loss + pi_loss
@@ -368,10 +372,12 @@ class TDMPC2(nn.Module):
         return {"loss": total, "model_loss": model_loss, "consistency_loss": consistency, "reward_loss": reward_loss,
                 "value_loss": value_loss, "pi_loss": pi_loss, "emb": emb}
 
-    def _pi_loss(self, zs: torch.Tensor) -> torch.Tensor:
-        """Policy term on detached latents ``zs (B, H, L)``; the Q heads get no gradient from it."""
+    def _pi_loss(self, zs: torch.Tensor, data_action: torch.Tensor) -> torch.Tensor:
+        """Policy term on detached latents ``zs (B, H, L)``; the Q heads get no gradient from it.
+        With ``bc_coef > 0`` it also pulls the prior's mean action towards the dataset's
+        ``data_action (B, H, A)`` (clipped to [-1, 1], the prior's range)."""
         wm = self.cfg["wm"]
-        _, action, log_prob = self.sample_pi(zs)
+        mean_action, action, log_prob = self.sample_pi(zs)
         entropy = -log_prob[..., 0] * self.action_dim
         self.qs.requires_grad_(False)
         try:
@@ -383,4 +389,8 @@ class TDMPC2(nn.Module):
         if self.training:
             self.scale.update(q[:, 0])
         weights = wm["rho"] ** torch.arange(zs.shape[1], device=zs.device, dtype=zs.dtype)
-        return (-(wm["entropy_coef"] * entropy + self.scale(q)).mean(0) * weights).mean()
+        per_step = -(wm["entropy_coef"] * entropy + self.scale(q))  # (B, H)
+        if wm["bc_coef"]:
+            target = data_action.to(mean_action.dtype).clamp(-1.0, 1.0)
+            per_step = per_step + wm["bc_coef"] * (mean_action - target).square().mean(-1)
+        return (per_step.mean(0) * weights).mean()
