@@ -377,8 +377,8 @@ def _distance_follows_separation(name: str, seed: int, size: int = 32) -> float:
     of the picture) and the feature distance to them, for a random backbone ``name``."""
     from stable_worldmodel.wm.backbones import create_backbone
 
-    torch.manual_seed(seed)
-    enc = create_backbone(name, image_size=size, width=8, hidden_size=8, grid=2).eval()
+    torch.manual_seed(seed)  # cnn draws from the global RNG, cnn_aa from its own seed
+    enc = create_backbone(name, image_size=size, width=8, hidden_size=8, grid=2, **({"seed": seed} if name == "cnn_aa" else {})).eval()
     pos, frames = _dot_frames(size)
     with torch.no_grad():
         feats = enc(frames).last_hidden_state[:, 1:].flatten(1)
@@ -410,6 +410,15 @@ def test_antialiased_cnn_backbone_shapes_and_state():
         create_backbone("cnn_aa", image_size=IMAGE, taps=0)
     with pytest.raises(SpaceError, match="16, 16"):
         enc(torch.zeros(1, 3, 8, 8))
+    # the weights are a function of the config (seed 0 by default), not of the global RNG
+    torch.manual_seed(1)
+    again = create_backbone("cnn_aa", image_size=IMAGE, width=8, hidden_size=8, grid=2, taps=3)
+    assert all(torch.equal(v, again.state_dict()[k]) for k, v in state.items())
+    assert float(torch.rand(1)) == float(torch.rand(1, generator=torch.Generator().manual_seed(1)))  # caller's RNG untouched
+    other = create_backbone("cnn_aa", image_size=IMAGE, width=8, hidden_size=8, grid=2, taps=3, seed=1)
+    assert not torch.equal(other.head.weight, enc.head.weight)
+    with pytest.raises(ConfigError, match="seed to be an int >= 0 or None"):
+        create_backbone("cnn_aa", image_size=IMAGE, seed=-1)
 
 
 def test_antialiased_cnn_features_follow_how_far_apart_dots_are():
