@@ -94,7 +94,9 @@ def test_cost_is_minus_the_predicted_return(model):
 
         model.reward[-1].bias.copy_(two_hot(torch.tensor(1.0), 21, -10.0, 10.0).clamp_min(1e-30).log())
         cost = model.get_cost(plan_info(1, 2), randn(1, 2, 3, A))
-    expected = -(1 + 0.99 + 0.99**2)
+    g = model.cfg["wm"]["discount"]
+    assert g == 0.9  # the tiny preset's
+    expected = -(1 + g + g**2)
     assert_close(cost, torch.full((1, 2), expected), atol=1e-2, rtol=0)
 
 
