@@ -154,6 +154,7 @@ def model_type_info(name: str) -> dict[str, Any]:
     cls = get_config_class(name)
     doc = (cls.__doc__ or "").strip().split("\n\n")[0]
     doc = re.sub(r":\w+:`~?(?:[\w.]*\.)?([^`.]+)`", r"\1", doc).replace("``", "")  # reST roles -> plain names
+
     def default(f: dataclasses.Field) -> Any:  # read off the class: some configs need a field set to build
         if f.default is not dataclasses.MISSING:
             return f.default
@@ -251,12 +252,12 @@ def show(
     known = sorted(_lister(kind)())
     if all:
         names = known
+    elif not names:
+        raise ConfigError(f"swm show {kind} requires NAMES or --all, got neither (known: {', '.join(known) or 'none'})")
     if kind == "model":  # a model type (swm train MODEL) shows its presets and fields
         from ..wm import list_models
 
         known = sorted({*known, *list_models()})
-    elif not names:
-        raise ConfigError(f"swm show {kind} requires NAMES or --all, got neither (known: {', '.join(known) or 'none'})")
     if kind == "dataset":  # one shard of a sharded dataset shows too
         from ..data.info import list_dataset_shards
 

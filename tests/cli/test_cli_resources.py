@@ -118,6 +118,8 @@ def test_show_requires_names_or_all(swm, error_line, two_datasets):
     assert result.exit_code == 1
     line = error_line(result)
     assert "--all" in line and "alpha" in line
+    model = swm("show", "model")
+    assert model.exit_code == 1 and "requires NAMES or --all" in error_line(model)
 
 
 def test_show_unknown_dataset_suggests(swm, error_line, two_datasets):
