@@ -52,16 +52,6 @@ def run(args: argparse.Namespace) -> list[dict]:
     return rows
 
 
-def _override(item: str, parser: argparse.ArgumentParser) -> tuple[str, object]:
-    key, sep, value = item.partition("=")
-    if not sep or not key:
-        parser.error(f"--set takes KEY=VALUE, got {item!r}")
-    try:
-        return key, json.loads(value)
-    except json.JSONDecodeError:
-        return key, value
-
-
 def print_row(row: dict, flush: bool = False) -> None:
     s = row["summary"]
     lo, hi = (100 * v for v in s.interval)
@@ -82,7 +72,13 @@ def main() -> None:
     parser.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE",
                         help="config overrides for every model trained, VALUE read as JSON when it parses (e.g. embed_dim=64)")
     args = parser.parse_args()
-    args.set = dict(_override(item, parser) for item in args.set)
+    from stable_worldmodel.errors import ConfigError
+    from stable_worldmodel.wm.config import parse_override
+
+    try:
+        args.set = dict(parse_override(item) for item in args.set)
+    except ConfigError as exc:
+        parser.error(str(exc))
     print(f"{args.env}: {args.episodes} expert episodes, tiny presets, {args.eval_episodes} evaluation episodes "
           f"(seeds {args.seed}..), {args.num_envs} envs, this machine; world models plan with PlanSettings() "
           f"(CEM 300 x 30, horizon 5, subgoals 'auto': the training data's waypoints once an episode stalls; "

@@ -21,17 +21,13 @@ def _float_pos(value: str) -> float:
 
 
 def _config_override(value: str) -> tuple[str, object]:
-    """``KEY=VALUE`` -> ``(KEY, VALUE)``, the value read as JSON when it parses (``2``, ``true``,
-    ``[1, 2]``), else kept as a string."""
-    import json
+    from ..errors import ConfigError
+    from ..wm.config import parse_override
 
-    key, sep, raw = value.partition("=")
-    if not sep or not key.strip():
-        raise typer.BadParameter(f"requires KEY=VALUE (a config field of the model, e.g. proprio_dim=2), got {value!r}")
     try:
-        return key.strip(), json.loads(raw)
-    except json.JSONDecodeError:
-        return key.strip(), raw
+        return parse_override(value)
+    except ConfigError as exc:
+        raise typer.BadParameter(str(exc)) from None
 
 
 def train_cmd(

@@ -11,7 +11,7 @@ from typing import Any, ClassVar
 
 from ..errors import ConfigError, did_you_mean
 
-__all__ = ["JEPAConfig", "IMAGENET_MEAN", "IMAGENET_STD", "VIT_SIZES", "GOAL_COSTS"]
+__all__ = ["JEPAConfig", "IMAGENET_MEAN", "IMAGENET_STD", "VIT_SIZES", "GOAL_COSTS", "parse_override"]
 
 IMAGENET_MEAN = (0.485, 0.456, 0.406)
 IMAGENET_STD = (0.229, 0.224, 0.225)
@@ -33,6 +33,20 @@ VIT_SIZES = {
     "huge": {"hidden_size": 1280, "num_hidden_layers": 32, "num_attention_heads": 16},
 }
 
+
+
+def parse_override(text: str) -> tuple[str, Any]:
+    """``"KEY=VALUE"`` -> ``(KEY, VALUE)``, a config override as ``swm train --set`` takes it: the
+    value read as JSON when it parses (``2``, ``true``, ``[1, 2]``), else kept as a string."""
+    import json
+
+    key, sep, raw = text.partition("=")
+    if not sep or not key.strip():
+        raise ConfigError(f"A config override requires KEY=VALUE (a config field of the model, e.g. proprio_dim=2), got {text!r}")
+    try:
+        return key.strip(), json.loads(raw)
+    except json.JSONDecodeError:
+        return key.strip(), raw
 
 @dataclass
 class JEPAConfig:

@@ -93,7 +93,7 @@ def test_unknown_dataset_is_one_line_naming_the_cached_ones(swm, toy, error_line
         (("--epochs", "0"), 2, "'--epochs': requires a number > 0, got '0'"),
         (("--lr", "-1"), 2, "'--lr': requires a number > 0, got '-1'"),
         (("--frameskip", "x"), 2, "'--frameskip'"),
-        (("--set", "lr"), 2, "requires KEY=VALUE (a config field of the model, e.g. proprio_dim=2), got 'lr'"),
+        (("--set", "lr"), 2, "A config override requires KEY=VALUE (a config field of the model, e.g. proprio_dim=2), got 'lr'"),
         (("--set", "embed_dimm=8"), 1, "DummyConfig has no field 'embed_dimm'. Did you mean one of 'embed_dim'"),
     ],
     ids=lambda v: " ".join(v) if isinstance(v, tuple) else None,

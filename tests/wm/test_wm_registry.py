@@ -119,3 +119,16 @@ def test_vit_configs_need_no_torch():
     code = ("import sys; sys.modules['torch'] = None  # any import of torch fails fast\n"
             "import stable_worldmodel.wm as wm; wm.get_config('lewm', 'small').target_tree(2)")
     subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120)
+
+
+def test_parse_override_reads_json_values():
+    from stable_worldmodel.wm.config import parse_override
+
+    assert parse_override("proprio_dim=2") == ("proprio_dim", 2)
+    assert parse_override(" image_mean=[0.4, 0.5, 0.6]") == ("image_mean", [0.4, 0.5, 0.6])
+    assert parse_override("backbone=cnn_aa") == ("backbone", "cnn_aa")  # not JSON: kept as text
+    assert parse_override("pretrained=true") == ("pretrained", True)
+    assert parse_override("path=a=b") == ("path", "a=b")  # split at the first '='
+    for bad in ("lr", "=2", ""):
+        with pytest.raises(ConfigError, match="requires KEY=VALUE"):
+            parse_override(bad)
