@@ -127,10 +127,13 @@ class TrainData:
                 "lower --frameskip / history or record longer episodes"
             )
         self.normalizer = self._fit_normalizer()
-        self.extra_normalizers = {key: self._fit_normalizer(key) for key in self.extra_keys if not self._goal_of_extra(key)}
-        # goal_<k> is in the units of <k>: the same normalizer (planning falls back to it too, see prepare_info)
-        self.extra_normalizers.update({key: self.extra_normalizers[self._goal_of_extra(key)] for key in self.extra_keys
-                                       if self._goal_of_extra(key)})
+        # goal_<k> is in the units of <k> when <k> is read too: it shares <k>'s normalizer (planning falls back to it
+        # as well, see prepare_info), which the protocol therefore does not repeat
+        prefix = keys.goal_key("")
+        self._shared_normalizer = {key: key[len(prefix):] for key in self.extra_keys
+                                   if key.startswith(prefix) and key[len(prefix):] in self.extra_widths}
+        self.extra_normalizers = {key: self._fit_normalizer(key) for key in self.extra_keys if key not in self._shared_normalizer}
+        self.extra_normalizers.update({key: self.extra_normalizers[base] for key, base in self._shared_normalizer.items()})
         self._reward_cumsum = self._cumulative_rewards() if self.needs_reward else None
         self.features: np.ndarray | None = None  # frozen-encoder features per dataset row (use_features)
         self.goals = self._goal_samplers(cfg) if isinstance(cfg, GoalConditioned) else {}
@@ -145,11 +148,6 @@ class TrainData:
         if cfg.actor_goal_probabilities:
             samplers[f"actor_{goal_key}"] = GoalSampler(lengths, offsets, groups, cfg.actor_goal_probabilities, **common)
         return samplers
-
-    def _goal_of_extra(self, key: str) -> str | None:
-        """``k`` when ``key`` is ``goal_<k>`` and ``k`` is also an extra column, else None."""
-        base = key[len(keys.goal_key("")):] if key.startswith(keys.goal_key("")) else None
-        return base if base in self.extra_keys else None
 
     def _fit_normalizer(self, key: str = keys.ACTION) -> Normalizer:
         values = self.dataset.get_col_data(key).reshape(self.dataset.num_rows, -1)
@@ -274,6 +272,6 @@ class TrainData:
             "action_dim": self.action_dim,
             "normalizers": {
                 keys.ACTION: self.normalizer.to_dict(),
-                **{k: n.to_dict() for k, n in self.extra_normalizers.items() if not self._goal_of_extra(k)},
+                **{k: n.to_dict() for k, n in self.extra_normalizers.items() if k not in self._shared_normalizer},
             },
         }
