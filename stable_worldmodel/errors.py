@@ -16,6 +16,12 @@ __all__ = [
     "SpaceError",
     "DependencyNotInstalled",
     "DatasetFormatError",
+    "DatasetBusyError",
+    "RunBusyError",
+    "UntrustedCheckpointError",
+    "CheckpointError",
+    "RunMismatchError",
+    "DiskFullError",
     "did_you_mean",
 ]
 
@@ -58,6 +64,28 @@ class WorkerError(SWMError, RuntimeError):
 
 class DatasetBusyError(SWMError, BlockingIOError):
     """A dataset that another writer (named in the message) is writing."""
+
+
+class RunBusyError(SWMError, BlockingIOError):
+    """A training run that another trainer (named in the message) is writing."""
+
+
+class UntrustedCheckpointError(SWMError, ValueError):
+    """A checkpoint whose config names a ``_target_`` outside the trusted prefixes: nothing was
+    imported or called; the message says how to trust it."""
+
+
+class CheckpointError(ConfigError):
+    """A checkpoint that cannot be used as it is: damaged, truncated, holding NaN/inf, or not the
+    model its config describes (a :class:`ConfigError`, so a ``ValueError``)."""
+
+
+class RunMismatchError(ConfigError):
+    """A trained run used on an env, image size, action dimension or frameskip other than its own."""
+
+
+class DiskFullError(SWMError, OSError):
+    """A write that failed for lack of space (or a file-size limit); what was written before stays intact."""
 
 
 def did_you_mean(name: str, candidates: Iterable[str], n: int = 3) -> str:

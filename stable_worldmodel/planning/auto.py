@@ -184,6 +184,7 @@ def _load_with(
     allow_pickle: bool | None,
     *,
     need_callable: bool = True,
+    trusted_targets: Any = None,
 ) -> Any:
     import torch
 
@@ -193,7 +194,7 @@ def _load_with(
         from ..wm.utils import load_checkpoint
 
         logger.info("loading %s from %s", method, weights)
-        obj, _ = load_checkpoint(weights, root)
+        obj, _ = load_checkpoint(weights, root, trusted_targets=trusted_targets)
         path = weights
     else:
         path = _pickled_path(model_name, root)
@@ -214,7 +215,9 @@ def _load_with(
     return module
 
 
-def AutoCostModel(model_name: str | Path, cache_dir: str | Path | None = None, *, allow_pickle: bool | None = None) -> Any:  # noqa: N802 (seed name)
+def AutoCostModel(  # noqa: N802 (seed name)
+    model_name: str | Path, cache_dir: str | Path | None = None, *, allow_pickle: bool | None = None, trusted_targets: Any = None
+) -> Any:
     """Load model ``model_name`` from the cache and return its module with ``get_cost`` (in eval mode).
 
     ``model_name`` is tried first as a checkpoint of :mod:`stable_worldmodel.wm.utils` (a run
@@ -224,15 +227,19 @@ def AutoCostModel(model_name: str | Path, cache_dir: str | Path | None = None, *
     file, ``<cache>/<model_name>_object.ckpt``, or a folder holding exactly one
     ``*_object.ckpt`` (see :func:`_pickled_path`). Unpickling runs code stored in the file:
     it warns, naming the file, and ``allow_pickle=False`` (or ``STABLEWM_REFUSE_PICKLE=1``)
-    refuses it. The module returned is the object itself or its first sub-module with ``get_cost``;
-    when there is none, :class:`MissingAttributeError` (a ``RuntimeError`` and a ``ConfigError``).
+    refuses it. ``config.json`` may only build trusted ``_target_`` names
+    (:mod:`stable_worldmodel.wm.trust`); ``trusted_targets`` adds prefixes. The module returned is
+    the object itself or its first sub-module with ``get_cost``; when there is none,
+    :class:`MissingAttributeError` (a ``RuntimeError`` and a ``ConfigError``).
     """
-    return _load_with("AutoCostModel", model_name, "get_cost", cache_dir, allow_pickle)
+    return _load_with("AutoCostModel", model_name, "get_cost", cache_dir, allow_pickle, trusted_targets=trusted_targets)
 
 
-def AutoActionableModel(model_name: str | Path, cache_dir: str | Path | None = None, *, allow_pickle: bool | None = None) -> Any:  # noqa: N802
+def AutoActionableModel(  # noqa: N802 (seed name)
+    model_name: str | Path, cache_dir: str | Path | None = None, *, allow_pickle: bool | None = None, trusted_targets: Any = None
+) -> Any:
     """Like :func:`AutoCostModel`, returning the module with ``get_action`` (for FeedForwardPolicy)."""
-    return _load_with("AutoActionableModel", model_name, "get_action", cache_dir, allow_pickle)
+    return _load_with("AutoActionableModel", model_name, "get_action", cache_dir, allow_pickle, trusted_targets=trusted_targets)
 
 
 def _load_model_with_attribute(

@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ConfigError, unknown_name
+from .trust import checkpoint_factory
 
 __all__ = ["BACKBONES", "BACKBONE_ALIASES", "BackboneSpec", "backbone_dir", "create_backbone", "list_backbones"]
 
@@ -196,6 +197,7 @@ def _random(transformers: Any, alias: str, spec: BackboneSpec, overrides: dict[s
     return transformers.AutoModel.from_config(config)
 
 
+@checkpoint_factory
 def create_backbone(
     name: str,
     path: str | os.PathLike | None = None,
@@ -213,6 +215,11 @@ def create_backbone(
     ``cnn``). The model is returned with upstream's adjustments (vision tower of CLIP-like
     models, LayerNorm head on ResNets); freezing it is the caller's job.
     """
+    if "trust_remote_code" in config_overrides:  # it would run Python files of the weights folder
+        raise ConfigError(
+            "create_backbone refuses trust_remote_code: backbones are built from transformers' own classes, "
+            f"got trust_remote_code={config_overrides['trust_remote_code']!r}"
+        )
     alias = _resolve(name)
     spec = BACKBONES[alias]
     if spec.family in LOCAL_FAMILIES:

@@ -18,12 +18,14 @@ from torch import nn
 
 from .._optional import require
 from ..errors import ConfigError, SpaceError, did_you_mean
+from .trust import checkpoint_factory
 from .config import VIT_SIZES
 
 __all__ = ["VIT_SIZES", "ConvEncoder", "EncoderOutput", "vit_hf"]
 
 
 
+@checkpoint_factory
 def vit_hf(
     size: str = "tiny",
     patch_size: int = 16,

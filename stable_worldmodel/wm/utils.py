@@ -11,14 +11,17 @@ holding exactly one ``.pt``, or ``<user>/<repo>``, looked up only in
 ``checkpoints/models--<user>--<repo>/`` (nothing is ever downloaded). Relative paths are
 taken under ``checkpoints/``. :func:`instantiate` resolves upstream's ``_target_`` names
 (``stable_worldmodel.wm.lewm.LeWM``, ``stable_pretraining.backbone.utils.vit_hf``, ...)
-to our classes and any other dotted name to an importable callable; ``_partial_`` gives a
-``functools.partial``.
+to our classes; ``_partial_`` gives a ``functools.partial``. A checkpoint never runs code it
+carries: ``_target_`` names outside the trusted prefixes are refused before anything is
+imported (:mod:`stable_worldmodel.wm.trust`), and weights are read with ``weights_only=True``.
 """
 
 from __future__ import annotations
 
+import errno
 import functools
-import importlib
+import hashlib
+import io
 import json
 import logging
 import os
@@ -26,7 +29,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from ..errors import ConfigError, UnknownNameError
+from ..errors import CheckpointError, ConfigError, DiskFullError
 
 logger = logging.getLogger(__name__)
 
@@ -68,43 +71,21 @@ def checkpoint_root(cache_dir: str | os.PathLike | None = None) -> Path:
 
 
 # -- instantiate ------------------------------------------------------------------------------
-def _locate(target: str) -> Any:
-    """The callable named by a dotted path (``pkg.module.Name`` or ``pkg.module.Class.method``)."""
-    target = TARGET_ALIASES.get(target, target)
-    parts = target.split(".")
-    for cut in range(len(parts) - 1, 0, -1):
-        try:
-            obj = importlib.import_module(".".join(parts[:cut]))
-        except ImportError:
-            continue
-        try:
-            for attr in parts[cut:]:
-                obj = getattr(obj, attr)
-        except AttributeError:
-            break
-        return obj
-    raise UnknownNameError(
-        f"instantiate requires an importable _target_, got {target!r}; "
-        f"known aliases: {', '.join(sorted(TARGET_ALIASES))}"
-    )
+def _locate(target: str, trusted_targets: Any = None) -> Any:
+    """The callable a ``_target_`` names, if a checkpoint may call it (see :mod:`.trust`)."""
+    from .trust import resolve_targets
+
+    return resolve_targets({"_target_": target}, trusted_targets=trusted_targets, aliases=TARGET_ALIASES)[target]
 
 
-def instantiate(config: Any) -> Any:
-    """Build objects from a ``_target_`` tree (a subset of hydra's ``instantiate``).
-
-    Dicts with ``_target_`` are called with their other keys (built depth first; keys
-    starting with ``_`` other than ``_args_`` are ignored); ``_partial_: true`` returns a
-    ``functools.partial``; lists and plain dicts are walked.
-    """
+def _build(config: Any, resolved: Mapping[str, Any]) -> Any:
     if isinstance(config, Mapping):
         if "_target_" not in config:
-            return {k: instantiate(v) for k, v in config.items()}
+            return {k: _build(v, resolved) for k, v in config.items()}
         target = config["_target_"]
-        if not isinstance(target, str):
-            raise ConfigError(f"instantiate requires _target_ to be a dotted name, got {target!r}")
-        fn = _locate(target)
-        args = [instantiate(v) for v in config.get("_args_", [])]
-        kwargs = {k: instantiate(v) for k, v in config.items() if not k.startswith("_")}
+        fn = resolved[target]
+        args = [_build(v, resolved) for v in config.get("_args_", [])]
+        kwargs = {k: _build(v, resolved) for k, v in config.items() if not k.startswith("_")}
         if config.get("_partial_", False):
             return functools.partial(fn, *args, **kwargs)
         try:
@@ -112,19 +93,80 @@ def instantiate(config: Any) -> Any:
         except TypeError as exc:
             raise ConfigError(f"instantiate could not call {target} with {sorted(kwargs)}: {exc}") from exc
     if isinstance(config, (list, tuple)):
-        return [instantiate(v) for v in config]
+        return [_build(v, resolved) for v in config]
     return config
 
 
+def instantiate(config: Any, *, trusted_targets: Any = None, source: str | os.PathLike | None = None) -> Any:
+    """Build objects from a ``_target_`` tree (a subset of hydra's ``instantiate``).
+
+    Dicts with ``_target_`` are called with their other keys (built depth first; keys
+    starting with ``_`` other than ``_args_`` are ignored); ``_partial_: true`` returns a
+    ``functools.partial``; lists and plain dicts are walked. Every ``_target_`` of the tree is
+    checked first (:mod:`stable_worldmodel.wm.trust`): outside ``stable_worldmodel`` modules,
+    ``torch.nn`` and transformers models, and the prefixes in ``trusted_targets`` /
+    ``$STABLEWM_TRUSTED_TARGETS``, it is an
+    :class:`~stable_worldmodel.errors.UntrustedCheckpointError` (naming ``source``) before
+    anything is imported or called.
+    """
+    from .trust import resolve_targets
+
+    resolved = resolve_targets(config, source=source, trusted_targets=trusted_targets, aliases=TARGET_ALIASES)
+    return _build(config, resolved)
+
+
 # -- save -------------------------------------------------------------------------------------
+_FULL_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG}
+
+
+def _fsync_dir(folder: Path) -> None:
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:  # a platform without directory fds: the rename is still atomic
+        return
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
 def _atomic_write(path: Path, write: Any) -> None:
+    """``write(tmp)`` then fsync and rename over ``path``: a crash leaves the old file or the new one.
+    A full disk (or a file-size limit) is a :class:`~stable_worldmodel.errors.DiskFullError`."""
     tmp = path.with_name(f".{path.name}.tmp{os.getpid()}")
     try:
         write(tmp)
+        with open(tmp, "rb+") as f:
+            os.fsync(f.fileno())
         os.replace(tmp, path)
+        _fsync_dir(path.parent)
+    except OSError as exc:
+        if exc.errno in _FULL_ERRNOS:
+            raise DiskFullError(
+                f"Could not write {path}: {os.strerror(exc.errno)}; the file it would replace is intact. "
+                "Free some space and try again (swm train: --resume continues from the last checkpoint)."
+            ) from exc
+        raise
     finally:
         if tmp.exists():
             tmp.unlink()
+
+
+def _write_bytes(data: Any) -> Any:
+    def write(p: Path) -> None:
+        with open(p, "wb") as f:
+            f.write(data)
+
+    return write
+
+
+def serialize_state(state: Mapping[str, Any]) -> bytes:
+    """``torch.save`` of ``state`` into memory (written by us, so a full disk is an OSError with its errno)."""
+    import torch
+
+    buf = io.BytesIO()
+    torch.save(dict(state), buf)
+    return buf.getvalue()
 
 
 def _json_ready(config: Any) -> Any:
@@ -144,17 +186,17 @@ def write_checkpoint(
     model: Any, folder: Path, config: Mapping[str, Any] | None, protocol: Mapping[str, Any] | None = None, filename: str = WEIGHTS_NAME
 ) -> Path:
     """Write ``folder/<filename>`` (the state dict), ``config.json`` and ``protocol.json`` (each
-    when given), every file through a temporary name. Returns the weights path."""
-    import torch
-
+    when given), every file through a temporary name, fsynced, then renamed. The protocol records
+    the weights' sha256 (``weights_sha256``), which :func:`load_checkpoint` checks. Returns the
+    weights path."""
     folder.mkdir(parents=True, exist_ok=True)
     path = folder / filename
-    state = {k: v.detach().cpu() for k, v in model.state_dict().items()}
-    _atomic_write(path, lambda p: torch.save(state, p))
+    data = serialize_state({k: v.detach().cpu() for k, v in model.state_dict().items()})
+    _atomic_write(path, _write_bytes(data))
     if config is not None:
         _write_json(folder / CONFIG_NAME, _json_ready(config))
     if protocol is not None:
-        _write_json(folder / PROTOCOL_NAME, dict(protocol))
+        _write_json(folder / PROTOCOL_NAME, {**protocol, "weights_file": filename, "weights_sha256": hashlib.sha256(data).hexdigest()})
     return path
 
 
@@ -309,42 +351,98 @@ def _apply_overrides(config: dict, extra_args: Mapping[str, Any] | None) -> None
         node[leaf] = value
 
 
-def load_checkpoint(
-    name: str | os.PathLike, cache_dir: str | os.PathLike | None = None, extra_args: Mapping[str, Any] | None = None
-) -> tuple[Any, dict[str, Any]]:
-    """``(model, protocol)``: :func:`load_pretrained` plus the ``protocol.json`` of our runs."""
+def _read_weights(weights: Path, protocol: Mapping[str, Any]) -> Mapping[str, Any]:
+    """The state dict in ``weights``, checked against the sha256 the run recorded and for NaN/inf."""
+    import pickle
+
     import torch
 
-    weights = resolve_checkpoint(name, cache_dir)
-    config = _read_json(weights.parent / CONFIG_NAME, "the model config")
-    if not isinstance(config, dict) or "_target_" not in config:
-        raise ConfigError(f"load_pretrained requires a config.json with a top-level _target_, got {weights.parent / CONFIG_NAME}")
-    _apply_overrides(config, extra_args)
     try:
-        state = torch.load(weights, map_location="cpu", weights_only=True)
-    except Exception as exc:  # pickle errors of every kind: name the file
-        raise ConfigError(f"load_pretrained could not read the weights {weights}: {exc}") from exc
-    model = instantiate(config)
+        data = weights.read_bytes()
+    except OSError as exc:
+        raise CheckpointError(f"load_pretrained could not read the weights {weights}: {exc}") from exc
+    recorded = protocol.get("weights_sha256")
+    if recorded and protocol.get("weights_file", WEIGHTS_NAME) == weights.name:
+        actual = hashlib.sha256(data).hexdigest()
+        if actual != recorded:
+            raise CheckpointError(
+                f"load_pretrained: {weights} is damaged: its sha256 is {actual[:16]}..., the run recorded "
+                f"{str(recorded)[:16]}... in {PROTOCOL_NAME} when it wrote it ({len(data)} bytes now). "
+                "Use another checkpoint of the run (step_<N>/) or train it again."
+            )
+    try:
+        state = torch.load(io.BytesIO(data), map_location="cpu", weights_only=True)
+    except pickle.UnpicklingError as exc:
+        raise CheckpointError(
+            f"load_pretrained refuses {weights}: it holds pickled Python objects, not only tensors, and pickles are "
+            f"never loaded from {WEIGHTS_NAME} ({str(exc).splitlines()[0][:200]}). Save the model's state_dict with "
+            "stable_worldmodel.wm.utils.save_pretrained."
+        ) from exc
+    except Exception as exc:  # a damaged zip: torch raises RuntimeError, EOFError, ...
+        raise CheckpointError(
+            f"load_pretrained: {weights} is damaged or truncated ({len(data)} bytes; "
+            f"{type(exc).__name__}: {str(exc).splitlines()[0][:200] if str(exc) else ''})"
+        ) from exc
     if not isinstance(state, Mapping):
-        raise ConfigError(f"load_pretrained requires a state_dict in {weights}, got {type(state).__name__}")
+        raise CheckpointError(f"load_pretrained requires a state_dict in {weights}, got {type(state).__name__}")
+    for key, value in state.items():
+        if torch.is_tensor(value) and (value.is_floating_point() or value.is_complex()) and not bool(torch.isfinite(value).all()):
+            bad = int((~torch.isfinite(value)).sum())
+            raise CheckpointError(
+                f"load_pretrained: {weights} holds non-finite weights: tensor {key!r} has {bad} NaN/inf value(s) "
+                f"of {value.numel()} (the first such tensor); the run diverged or the file was damaged"
+            )
+    return state
+
+
+def load_checkpoint(
+    name: str | os.PathLike,
+    cache_dir: str | os.PathLike | None = None,
+    extra_args: Mapping[str, Any] | None = None,
+    *,
+    trusted_targets: Any = None,
+) -> tuple[Any, dict[str, Any]]:
+    """``(model, protocol)``: :func:`load_pretrained` plus the ``protocol.json`` of our runs."""
+    weights = resolve_checkpoint(name, cache_dir)
+    config_path = weights.parent / CONFIG_NAME
+    config = _read_json(config_path, "the model config")
+    if not isinstance(config, dict) or "_target_" not in config:
+        raise ConfigError(f"load_pretrained requires a config.json with a top-level _target_, got {config_path}")
+    _apply_overrides(config, extra_args)
+    from .trust import resolve_targets
+
+    resolved = resolve_targets(config, source=config_path, trusted_targets=trusted_targets, aliases=TARGET_ALIASES)
+    protocol = read_protocol(weights)
+    state = _read_weights(weights, protocol)
+    model = _build(config, resolved)
     state = convert_vit_keys(state, set(model.state_dict()))
     try:
         missing, unexpected = model.load_state_dict(state, strict=False)
     except RuntimeError as exc:  # same keys, other shapes: the config does not describe these weights
-        raise ConfigError(f"load_pretrained: the weights {weights} do not fit the model of {CONFIG_NAME} beside them: {exc}") from exc
+        raise CheckpointError(f"load_pretrained: the weights {weights} do not fit the model of {CONFIG_NAME} beside them: {exc}") from exc
     if missing or unexpected:
-        raise ConfigError(
+        raise CheckpointError(
             f"load_pretrained: the weights {weights} do not fit the model of {CONFIG_NAME}: "
             f"missing keys {list(missing)[:8]}, unexpected keys {list(unexpected)[:8]}"
         )
     model.eval()
-    return model, read_protocol(weights)
+    return model, protocol
 
 
-def load_pretrained(name: str | os.PathLike, cache_dir: str | os.PathLike | None = None, extra_args: Mapping[str, Any] | None = None) -> Any:
+def load_pretrained(
+    name: str | os.PathLike,
+    cache_dir: str | os.PathLike | None = None,
+    extra_args: Mapping[str, Any] | None = None,
+    *,
+    trusted_targets: Any = None,
+) -> Any:
     """Build the model of ``config.json`` and load its weights (see the module docstring).
 
     ``extra_args`` overrides dotted config keys before building (``{"predictor.dropout": 0}``).
-    The model is returned in eval mode.
+    ``trusted_targets`` (``("mylab.models.",)``) lets the config call more than the built-in
+    trusted ``_target_`` prefixes (:mod:`stable_worldmodel.wm.trust`; also
+    ``$STABLEWM_TRUSTED_TARGETS``). The weights are read with ``weights_only=True``, checked
+    against the sha256 of ``protocol.json`` (runs of ours) and for NaN/inf. The model is
+    returned in eval mode.
     """
-    return load_checkpoint(name, cache_dir, extra_args)[0]
+    return load_checkpoint(name, cache_dir, extra_args, trusted_targets=trusted_targets)[0]

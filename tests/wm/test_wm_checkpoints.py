@@ -194,12 +194,12 @@ def test_instantiate_partial_and_nesting():
     assert isinstance(built["norm"], functools.partial) and built["norm"].func is torch.nn.BatchNorm1d
     assert isinstance(built["norm"](4), torch.nn.BatchNorm1d)
     assert built["xs"] == [1, {"a": 2}]
-    assert instantiate({"_target_": "builtins.max", "_args_": [1, 3]}) == 3
+    assert instantiate({"_target_": "builtins.max", "_args_": [1, 3]}, trusted_targets=("builtins",)) == 3
 
 
 def test_instantiate_errors():
     with pytest.raises(UnknownNameError, match="no_such_module"):
-        instantiate({"_target_": "no_such_module.Thing"})
+        instantiate({"_target_": "stable_worldmodel.no_such_module.Thing"})
     with pytest.raises(ConfigError, match="widht"):
         instantiate({"_target_": "stable_worldmodel.wm.encoders.ConvEncoder", "widht": 8})
     with pytest.raises(ConfigError, match="dotted name"):

@@ -72,7 +72,12 @@ class FrameConfig(JEPAConfig):
     def target_tree(self, action_dim: int) -> dict[str, Any]:
         from ..utils import CONFIG_NAME, _read_json
 
-        source_tree = _read_json(self._source_weights.parent / CONFIG_NAME, "the source run's model config")
+        from ..trust import resolve_targets
+        from ..utils import TARGET_ALIASES
+
+        source_path = self._source_weights.parent / CONFIG_NAME
+        source_tree = _read_json(source_path, "the source run's model config")
+        resolve_targets(source_tree, source=source_path, aliases=TARGET_ALIASES)  # refused before anything is built
         return {
             "_target_": self.target,
             "world_model": source_tree,
