@@ -81,16 +81,10 @@ def train(
     encoder (PreJEPA) trains on its features, computed once per dataset and encoder and kept on
     disk (:mod:`stable_worldmodel.train.features`; ``feature_cache=False`` encodes every batch).
     """
-    import shutil
-
-    import torch
-
     from ..wm import get_config
     from ..wm import utils as wmu
     from . import distributed
-    from .data import TrainData
-    from .run import STATE_NAME, MetricsLog
-    from .trainer import Trainer, resolve_device
+    from .trainer import resolve_device
 
     _positive("steps", steps)
     _positive("batch_size", batch_size)
@@ -114,13 +108,86 @@ def train(
     if not run or "/" in run or "\\" in run or run.startswith("."):
         raise ConfigError(f"train requires a plain run name (no path), got {run!r}")
     folder = wmu.checkpoint_root(cache_dir) / run
-    state_path = folder / STATE_NAME
-    if resume and not state_path.is_file():
-        raise FileNotFoundError(f"train(resume=True) requires a previous run with {state_path}, which does not exist")
-    if not resume and folder.exists():
-        raise FileExistsError(f"Run folder {folder} exists: pass resume=True (--resume) to continue it, or another name")
-    distributed.barrier(dist_info)  # every process has checked before process 0 creates the folder
+    lock = _lock_run(folder, run) if dist_info.is_main else None
+    try:
+        resume = _check_run_folder(folder, resume, run)
+        distributed.barrier(dist_info)  # every process has checked before process 0 creates the folder
+        return _train_locked(
+            model=model, dataset=dataset, preset=preset, steps=steps, epochs=epochs, precision=precision, seed=seed,
+            resume=resume, cache_dir=cache_dir, log_every=log_every, val_every=val_every, ckpt_every=ckpt_every,
+            progress=progress, feature_cache=feature_cache, cfg=cfg, dist_info=dist_info, dev=dev, run=run, folder=folder,
+        )
+    finally:
+        if lock is not None:
+            lock.release()
 
+
+def _lock_run(folder: Any, run: str) -> Any:
+    """Hold the run's writer lock (``checkpoints/.<run>.lock``) or raise :class:`RunBusyError` naming its holder."""
+    from ..data._lock import WriterLock, lock_path
+    from ..errors import DatasetBusyError, RunBusyError
+
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        return WriterLock(folder).acquire()
+    except DatasetBusyError as exc:
+        try:
+            holder = lock_path(folder).read_text().strip() or "another process"
+        except OSError:
+            holder = "another process"
+        raise RunBusyError(
+            f"Run {run!r} requires a single trainer, got one already training it: {holder}; "
+            f"let it finish (or stop it), or train under another --name"
+        ) from exc
+
+
+def _check_run_folder(folder: Any, resume: bool, run: str) -> bool:
+    """Whether to resume: a run with a training state resumes (``resume``) or is an error (not
+    ``resume``); a folder without any checkpoint (killed before its first one) starts again from step 0."""
+    import shutil
+
+    from .run import STATE_NAME
+
+    has_state = (folder / STATE_NAME).is_file()
+    has_weights = folder.is_dir() and any(folder.rglob("*.pt"))
+    if resume and has_state:
+        return True
+    if resume and not folder.exists():  # no such run: likely a typo, not a run killed early
+        from ..errors import did_you_mean
+
+        runs = sorted(p.name for p in folder.parent.iterdir() if p.is_dir()) if folder.parent.is_dir() else []
+        raise FileNotFoundError(
+            f"train(resume=True) requires a previous run with {folder / STATE_NAME}, which does not exist."
+            f"{did_you_mean(run, runs)}"
+        )
+    if resume:
+        if has_weights:
+            raise FileNotFoundError(
+                f"train(resume=True) requires {folder / STATE_NAME} to continue run {run!r}, which does not exist "
+                "(the run holds weights but no training state); train under another name"
+            )
+        logger.warning("Run %r has no checkpoint to resume (%s): starting from step 0", run, folder)
+    elif has_weights or has_state:
+        raise FileExistsError(f"Run folder {folder} exists: pass resume=True (--resume) to continue it, or another name")
+    if folder.exists():  # killed before its first checkpoint: nothing in it is worth keeping
+        logger.info("Run folder %s holds no checkpoint: reusing it", folder)
+        shutil.rmtree(folder)
+    return False
+
+
+def _train_locked(*, model, dataset, preset, steps, epochs, precision, seed, resume, cache_dir, log_every, val_every,
+                  ckpt_every, progress, feature_cache, cfg, dist_info, dev, run, folder) -> TrainResult:
+    import shutil
+
+    import torch
+
+    from ..wm import utils as wmu
+    from . import distributed
+    from .data import TrainData
+    from .run import STATE_NAME, MetricsLog, load_train_state
+    from .trainer import Trainer
+
+    state_path = folder / STATE_NAME
     torch.manual_seed(seed)
     data = TrainData(dataset, cfg, seed=seed, device=dev, cache_dir=cache_dir)
     if epochs is not None:
@@ -162,6 +229,7 @@ def train(
         "image_std": list(cfg.image_std),
         "precision": precision,
         **data.protocol(),
+        "final": None,  # set when the run ends: a run killed mid-way shows as partial
     }
     if features is not None:
         protocol["feature_cache"] = {"file": str(features.path), "computed": features.computed, "seconds": round(features.seconds, 3)}
@@ -177,7 +245,7 @@ def train(
     if dist_info.is_main:
         folder.mkdir(parents=True, exist_ok=True)
     if resume:
-        state = torch.load(state_path, map_location=dev, weights_only=False)
+        state = load_train_state(state_path, map_location=dev)
         if int(state.get("steps", steps)) != steps:
             raise ConfigError(f"train(resume=True) requires the same number of steps as the run ({state.get('steps')}), got {steps}")
         trainer.load_state_dict(state)

@@ -18,9 +18,91 @@ from typing import Any
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["MetricsLog", "plot_losses"]
+__all__ = ["MetricsLog", "load_train_state", "plot_losses", "rng_state", "set_rng_state"]
 
 STATE_NAME = "train_state.ckpt"
+#: version of the train state layout (1: tensors/numbers/strings only, RNG states as tensors)
+TRAIN_STATE_FORMAT = 1
+
+
+# -- the training state, without pickle ---------------------------------------------------------
+def rng_state(generator: Any) -> dict[str, Any]:
+    """torch (CPU and CUDA), numpy, Python and ``generator``'s RNG states as tensors and numbers."""
+    import random
+
+    import numpy as np
+    import torch
+
+    name, keys, pos, has_gauss, cached = np.random.get_state()
+    version, internal, gauss_next = random.getstate()
+    return {
+        "torch": torch.get_rng_state(),
+        "cuda": torch.cuda.get_rng_state_all() if torch.cuda.is_available() else [],
+        "numpy": {"name": str(name), "keys": torch.from_numpy(np.asarray(keys, dtype=np.int64)), "pos": int(pos),
+                  "has_gauss": int(has_gauss), "cached_gaussian": float(cached)},
+        "python": {"version": int(version), "state": torch.tensor(internal, dtype=torch.int64), "gauss_next": gauss_next},
+        "batches": generator.get_state(),
+    }
+
+
+def set_rng_state(rng: dict[str, Any], generator: Any) -> None:
+    """Restore what :func:`rng_state` saved (also the tuples of train states written before format 1)."""
+    import random
+
+    import numpy as np
+    import torch
+
+    torch.set_rng_state(rng["torch"])
+    if rng["cuda"] and torch.cuda.is_available():
+        torch.cuda.set_rng_state_all(rng["cuda"])
+    state = rng["numpy"]
+    if isinstance(state, dict):
+        keys = np.asarray(state["keys"].numpy(), dtype=np.uint32)
+        state = (state["name"], keys, state["pos"], state["has_gauss"], state["cached_gaussian"])
+    np.random.set_state(state)
+    state = rng["python"]
+    if isinstance(state, dict):
+        state = (state["version"], tuple(int(v) for v in state["state"].tolist()), state["gauss_next"])
+    random.setstate(state)
+    generator.set_state(rng["batches"])
+
+
+def load_train_state(path: Path, map_location: Any = None) -> dict[str, Any]:
+    """The training state in ``path``, read with ``weights_only=True``.
+
+    A state written before format 1 holds pickled numpy/Python objects: it is refused when
+    ``STABLEWM_REFUSE_PICKLE=1``, else loaded with a warning naming the file (as ``*_object.ckpt``).
+    """
+    import os
+    import pickle
+    import warnings
+
+    import torch
+
+    from ..errors import CheckpointError
+    from ..planning.auto import PICKLE_ENV
+
+    try:
+        return torch.load(path, map_location=map_location, weights_only=True)
+    except pickle.UnpicklingError:
+        pass
+    except Exception as exc:  # a damaged or truncated file
+        raise CheckpointError(
+            f"Resuming requires a readable {path.name}, got a damaged or truncated {path} ({type(exc).__name__}: "
+            f"{str(exc).splitlines()[0][:160] if str(exc) else ''}); start the run again under another name"
+        ) from exc
+    if os.environ.get(PICKLE_ENV, "").strip().lower() in ("1", "true", "yes"):
+        raise CheckpointError(
+            f"Resuming refuses the pickled training state {path} ({PICKLE_ENV} is set): it was written by an older "
+            "version; unset the variable to load it if you trust the file"
+        )
+    warnings.warn(
+        f"{path} is a pickled training state (written by an older version): loading it runs code stored in the file; "
+        f"load only files you trust (set {PICKLE_ENV}=1 to refuse pickles). The next checkpoint rewrites it without pickle.",
+        UserWarning,
+        stacklevel=2,
+    )
+    return torch.load(path, map_location=map_location, weights_only=False)
 
 
 class MetricsLog:

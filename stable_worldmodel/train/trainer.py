@@ -14,20 +14,18 @@ from __future__ import annotations
 import contextlib
 import logging
 import math
-import random
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import torch
 
 from ..errors import ConfigError
 from ..wm import utils as wmu
 from . import distributed
 from .distributed import DistInfo
-from .run import STATE_NAME, MetricsLog, plot_losses
+from .run import STATE_NAME, TRAIN_STATE_FORMAT, MetricsLog, plot_losses, rng_state, set_rng_state
 
 logger = logging.getLogger(__name__)
 
@@ -142,21 +140,18 @@ class Trainer:
         self.window: list[Any] = []  # train losses (floats or 0-d tensors) since the last log (checkpointed, for exact resume)
         self._collapse_warned = False
 
-    # -- state -------------------------------------------------------------------------------
+    # -- state ---------------------------------------------------------------------------------
     def state_dict(self) -> dict[str, Any]:
+        """Everything to resume exactly, as tensors, numbers, strings, lists and dicts only
+        (loadable with ``torch.load(..., weights_only=True)``: no pickle)."""
         return {
+            "format": TRAIN_STATE_FORMAT,
             "model": self.model.state_dict(),
             "optimizer": self.optimizer.state_dict(),
             "scheduler": self.scheduler.state_dict(),
             "scaler": self.scaler.state_dict(),
             "step": self.step,
-            "rng": {
-                "torch": torch.get_rng_state(),
-                "cuda": torch.cuda.get_rng_state_all() if torch.cuda.is_available() else [],
-                "numpy": np.random.get_state(),
-                "python": random.getstate(),
-                "batches": self.generator.get_state(),
-            },
+            "rng": rng_state(self.generator),
             "steps": self.steps,
             "loss_window": [float(v) for v in self.window],
         }
@@ -168,13 +163,7 @@ class Trainer:
         self.scaler.load_state_dict(state["scaler"])
         self.step = int(state["step"])
         self.window = [float(v) for v in state.get("loss_window", [])]
-        rng = state["rng"]
-        torch.set_rng_state(rng["torch"])
-        if rng["cuda"] and torch.cuda.is_available():
-            torch.cuda.set_rng_state_all(rng["cuda"])
-        np.random.set_state(rng["numpy"])
-        random.setstate(rng["python"])
-        self.generator.set_state(rng["batches"])
+        set_rng_state(state["rng"], self.generator)
 
     def save(self, final: bool = False) -> None:
         """Write the model (run folder and ``step_<N>/``) and the training state (process 0 only)."""
@@ -184,7 +173,7 @@ class Trainer:
         for where in ([self.folder] + ([self.folder / f"step_{self.step:06d}"] if not final else [])):
             where.mkdir(parents=True, exist_ok=True)
             wmu.write_checkpoint(self.model, where, self.config_tree, protocol)
-        wmu._atomic_write(self.folder / STATE_NAME, lambda p: torch.save(self.state_dict(), p))
+        wmu._atomic_write(self.folder / STATE_NAME, wmu._write_bytes(wmu.serialize_state(self.state_dict())))
 
     # -- loop --------------------------------------------------------------------------------
     def _autocast(self):

@@ -109,7 +109,7 @@ def test_resume_equals_an_uninterrupted_run(fit, monkeypatch, model, every, cras
         with pytest.raises(Crash):
             fit(model, "split", **kwargs)
     folder = whole.folder.parent / "split"
-    assert torch.load(folder / "train_state.ckpt", weights_only=False)["step"] == 6
+    assert torch.load(folder / "train_state.ckpt", weights_only=True)["step"] == 6
     assert train_losses(folder)[-1][0] > 6  # logged after the checkpoint: dropped on resume
 
     resumed = fit(model, "split", resume=True, **kwargs)
@@ -143,7 +143,7 @@ def test_run_folder_holds_model_protocol_metrics_plot_and_checkpoints(fit, captu
     assert sorted(p.name for p in folder.glob("step_*")) == ["step_000004"]
     step4 = folder / "step_000004"
     assert json.loads((step4 / "protocol.json").read_text())["steps_done"] == 4
-    assert torch.load(folder / "train_state.ckpt", weights_only=False)["step"] == 8
+    assert torch.load(folder / "train_state.ckpt", weights_only=True)["step"] == 8
     assert list_checkpoints() == ["layout", "layout/step_000004"]
 
     # metrics: the same records in jsonl and csv, train loss every 2 steps, val loss every 4
