@@ -32,6 +32,32 @@ def check_file(path: Path, owner: str) -> None:
         raise FileNotFoundError(f"{owner} requires an existing .h5 file, got {str(path)!r} (not found)")
 
 
+# what h5py raises for metadata HDF5 cannot read (RuntimeError: "Link iteration failed",
+# "Unable to get group info"...; KeyError when an object cannot be opened)
+H5_READ_ERRORS = (OSError, RuntimeError, KeyError)
+
+
+def damaged(owner: str, path: Path, exc: BaseException) -> DatasetFormatError:
+    """The error for HDF5 file ``path`` that HDF5 fails to read: it names the file and, when the
+    file is shorter than its superblock says, how much of it is left."""
+    from ._superblock import truncation
+
+    cut = truncation(path)
+    state = f"truncated ({cut})" if cut else "damaged or truncated"
+    return DatasetFormatError(
+        f"{owner} requires an intact HDF5 file, got {path}, which is {state}: {exc}; "
+        "restore it from a copy or record it again"
+    )
+
+
+def _names(f) -> str:
+    """The names in open file ``f`` for an error message; a damaged group cannot always list them."""
+    try:
+        return str(sorted(f))
+    except H5_READ_ERRORS:
+        return "(unreadable)"
+
+
 def _fresh(dset):
     """``dset`` as it is on disk now: a file opened twice in one process shares HDF5's cached metadata."""
     if dset.file.swmr_mode:
@@ -48,15 +74,19 @@ def read_index(f, path: Path, owner: str = "HDF5Dataset") -> tuple[np.ndarray, n
     """
     import h5py
 
+    from ._superblock import truncation
+
     def bad(what: str) -> DatasetFormatError:
-        return DatasetFormatError(f"{owner} requires {what} in {path}")
+        cut = truncation(path)  # the likely cause of a missing or unreadable object
+        return DatasetFormatError(f"{owner} requires {what} in {path}" + (f", which is truncated ({cut})" if cut else ""))
 
     index = {}
     for name in (keys.EP_LEN, keys.EP_OFFSET):
         dset = f.get(name)
         if not isinstance(dset, h5py.Dataset):
             got = "missing" if dset is None else type(dset).__name__
-            raise bad(f"a 1-D integer dataset {name!r} (the episode index), got {got}; columns: {sorted(f)}")
+            listing = "" if truncation(path) else f"; columns: {_names(f)}"  # a cut file: HDF5 would retry in vain
+            raise bad(f"a 1-D integer dataset {name!r} (the episode index), got {got}{listing}")
         if dset.ndim != 1 or not np.issubdtype(dset.dtype, np.integer):
             raise bad(f"a 1-D integer dataset {name!r}, got shape {dset.shape} of {dset.dtype}")
         index[name] = _fresh(dset)

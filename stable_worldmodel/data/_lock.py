@@ -10,6 +10,8 @@ removed by the holder on release, and a waiter that locked a file removed meanwh
 
 from __future__ import annotations
 
+import contextlib
+import errno
 import os
 import socket
 import sys
@@ -17,9 +19,10 @@ import threading
 import time
 from pathlib import Path
 
-from ..errors import ConfigError, DatasetBusyError
+from ..errors import ConfigError, DatasetBusyError, DiskFullError
 
 POLL_S = 0.05
+_FULL_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG}  # no space, quota, file-size limit
 _held: set[str] = set()  # lock files held by this process
 _held_guard = threading.Lock()
 
@@ -94,8 +97,18 @@ class WriterLock:
                 )
             time.sleep(POLL_S)
         self._fd, self._pid, self._key = fd, os.getpid(), key
-        os.ftruncate(fd, 0)
-        os.pwrite(fd, _describe_self().encode(), 0)
+        try:
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, _describe_self().encode(), 0)
+        except BaseException as exc:  # a lock that cannot name its holder is not kept (nor left held here)
+            with contextlib.suppress(OSError):  # the failure to report is the one above
+                self.release()
+            if isinstance(exc, OSError) and exc.errno in _FULL_ERRNOS:
+                raise DiskFullError(
+                    f"WriterLock requires room to write the lock file {self.path}, got {os.strerror(exc.errno)}; "
+                    "free some space on that disk (or raise the quota) and try again"
+                ) from exc
+            raise
         return self
 
     def _still_linked(self, fd: int) -> bool:

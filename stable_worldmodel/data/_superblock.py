@@ -105,7 +105,36 @@ def needs_repair(path: str | os.PathLike) -> bool:
     """True when the superblock still carries "open for write" flags."""
     with open(path, "rb") as fh:
         head = fh.read(12)
-    return head[:8] == SIGNATURE and head[8] >= 2 and head[11] != 0
+    return len(head) == 12 and head[:8] == SIGNATURE and head[8] >= 2 and head[11] != 0  # a cut-off file has no flags
+
+
+def _head_and_size(path: str | os.PathLike) -> tuple[bytes, int]:
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(64), os.fstat(fh.fileno()).st_size
+    except OSError:
+        return b"", 0
+
+
+def _cut(head: bytes) -> bool:
+    """``head`` (a whole file) starts with the signature and ends before its v2/v3 superblock does."""
+    return head[:8] == SIGNATURE and (len(head) < 12 or (head[8] in (2, 3) and len(head) < 16 + 4 * head[9]))
+
+
+def cut_in_superblock(path: str | os.PathLike) -> bool:
+    """``path`` is an HDF5 file that ends inside its superblock: no HDF5 library can open it."""
+    return _cut(_head_and_size(path)[0])
+
+
+def truncation(path: str | os.PathLike) -> str | None:
+    """How HDF5 file ``path`` is cut short ("4096 bytes of the 361544 its superblock declares"), or None
+    when it is not (or is not an HDF5 file, or its superblock is not a v2/v3 one we can read)."""
+    head, size = _head_and_size(path)
+    if _cut(head):
+        return f"{size} bytes, cut off inside its superblock"
+    if _known(head) and size < _eoa(head):
+        return f"{size} bytes of the {_eoa(head)} its superblock declares"
+    return None
 
 
 def seal(path: str | os.PathLike) -> bool:

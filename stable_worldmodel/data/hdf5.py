@@ -16,6 +16,7 @@ import logging
 import os
 import re
 import sys
+import time
 from collections import OrderedDict
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -28,7 +29,7 @@ from ..errors import ConfigError, DatasetFormatError
 from . import _superblock
 from .dataset import Dataset
 from .utils import resolve_dataset_path
-from ._index import check_file, read_index
+from ._index import H5_READ_ERRORS, check_file, damaged, read_index
 from .writer import is_image_column
 
 logger = logging.getLogger(__name__)
@@ -86,6 +87,32 @@ def _open_swmr(path: str | os.PathLike, locking: bool | None):
     return h5py.File(fid)
 
 
+TORN_RETRIES = 6  # reads of a chunk that fails its checksum, a few ms apart (see _retry_torn)
+
+
+def _is_filter_failure(exc: BaseException) -> bool:
+    """``exc`` is HDF5 refusing a chunk: a checksum that fails (Fletcher-32, zlib's Adler-32...)."""
+    return isinstance(exc, OSError) and "filter returned failure" in str(exc)
+
+
+def _retry_torn(read: Callable[[], Any]) -> Any:
+    """``read()``, tried again while a chunk fails its checksum (up to :data:`TORN_RETRIES` times).
+
+    A writer appending to a file whose raw chunks carry checksums (``writer.CHECKSUM_RAW``) rewrites
+    the partly filled chunk of each column whole, in place (see :mod:`._checksum`); a read that
+    overlaps that write can see the first pages of one version and the checksum of the other. Read
+    again once the write is over, it holds; a damaged chunk still fails, some 60 ms later.
+    """
+    for attempt in range(TORN_RETRIES + 1):
+        try:
+            return read()
+        except OSError as exc:
+            if attempt == TORN_RETRIES or not _is_filter_failure(exc):
+                raise
+            time.sleep(0.001 * 2**attempt)
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
 @functools.cache
 def _register_filters() -> bool:
     """Import ``hdf5plugin`` where it is installed: it registers the compression filters (Blosc,
@@ -113,6 +140,8 @@ def open_h5(path: str | os.PathLike):
     import h5py
 
     _register_filters()
+    if _superblock.cut_in_superblock(path):  # nothing can read it: skip HDF5's read attempts
+        raise damaged("HDF5Dataset", Path(path), "no complete superblock")
     if _superblock.needs_repair(path):
         try:
             _superblock.repair(path)
@@ -131,6 +160,8 @@ def open_h5(path: str | os.PathLike):
             return attempt()
         except OSError as exc:
             if i == len(attempts) - 1:
+                if _superblock.truncation(path):
+                    raise damaged("HDF5Dataset", Path(path), exc) from exc
                 raise DatasetFormatError(f"HDF5Dataset requires a readable HDF5 file, got {str(path)!r}: {exc}") from exc
     raise AssertionError("unreachable")  # pragma: no cover
 
@@ -187,10 +218,10 @@ class HDF5Dataset(Dataset):
         self._pid = None
         self._blocks: dict[str, OrderedDict] = {}
         try:
-            self._read_indexes()
-        except (OSError, KeyError) as exc:  # h5py: damaged metadata (KeyError when an object cannot be opened)
+            _retry_torn(self._read_indexes)
+        except H5_READ_ERRORS as exc:  # h5py: damaged metadata
             self.close()
-            raise DatasetFormatError(f"HDF5Dataset could not read the episode index of {self.path} (damaged?): {exc}") from exc
+            raise damaged("HDF5Dataset", self.path, exc) from exc
         except DatasetFormatError:
             self.close()
             raise
@@ -319,23 +350,33 @@ class HDF5Dataset(Dataset):
     def _rows(self, col: str, start: int, stop: int) -> np.ndarray:
         """Rows ``start:stop`` of ``col`` from the file (the shards); a damaged file raises :class:`DatasetFormatError`."""
         try:
-            files = self._handles()
-            if len(files) == 1:
-                return files[0][col][start:stop]
-            renumber = col in (keys.EP_IDX, keys.EPISODE_ID)  # episode numbers count across shards
-            parts = [f[col][max(start, lo) - lo:min(stop, hi) - lo] + (eb if renumber else 0)
-                     for f, lo, hi, eb in zip(files, self._bases[:-1], self._bases[1:], self._episode_bases)
-                     if max(start, lo) < min(stop, hi)]
-            if not parts:
-                return files[0][col][0:0]
-            return parts[0] if len(parts) == 1 else np.concatenate(parts)
-        except OSError as exc:
+            return _retry_torn(lambda: self._read_rows(col, start, stop))
+        except (OSError, RuntimeError) as exc:
             if any(t in str(exc).lower() for t in ("plugin", "not registered", "required filter")):  # an unknown compression filter
                 raise DatasetFormatError(
                     f"HDF5Dataset requires the compression filter of column {col!r} of {self.path}, got: {exc}; "
                     "install it with: pip install hdf5plugin"
                 ) from exc
+            if _is_filter_failure(exc):
+                raise DatasetFormatError(
+                    f"HDF5Dataset requires chunks whose checksums hold, got a damaged chunk in rows {start}:{stop} "
+                    f"of column {col!r} of {self.path}: {exc}; restore the file from a copy (a recording killed "
+                    "in the middle of a commit is repaired by resuming it: open an HDF5Writer on it)"
+                ) from exc
             raise DatasetFormatError(f"HDF5Dataset could not read rows {start}:{stop} of column {col!r} of {self.path} (damaged?): {exc}") from exc
+
+    def _read_rows(self, col: str, start: int, stop: int) -> np.ndarray:
+        """Rows ``start:stop`` of ``col`` as h5py reads them (its errors unchanged)."""
+        files = self._handles()
+        if len(files) == 1:
+            return files[0][col][start:stop]
+        renumber = col in (keys.EP_IDX, keys.EPISODE_ID)  # episode numbers count across shards
+        parts = [f[col][max(start, lo) - lo:min(stop, hi) - lo] + (eb if renumber else 0)
+                 for f, lo, hi, eb in zip(files, self._bases[:-1], self._bases[1:], self._episode_bases)
+                 if max(start, lo) < min(stop, hi)]
+        if not parts:
+            return files[0][col][0:0]
+        return parts[0] if len(parts) == 1 else np.concatenate(parts)
 
     @property
     def _end(self) -> int:

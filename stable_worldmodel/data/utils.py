@@ -68,8 +68,20 @@ def _root(cache_dir: str | os.PathLike | None) -> Path:
     return Path(cache_dir).expanduser() if cache_dir is not None else get_cache_dir()
 
 
+def _folder_like(text: str) -> bool:
+    """``text`` ends in a path separator (``/``, or ``os.sep``/``os.altsep`` where they differ)."""
+    return text.endswith(tuple({"/", os.sep, os.altsep or "/"}))
+
+
+def _strip_seps(text: str) -> str:
+    return text.rstrip("".join({"/", os.sep, os.altsep or "/"}))
+
+
 def resolve_dataset_path(name: str | os.PathLike, cache_dir: str | os.PathLike | None = None, suffix: str = ".h5") -> Path:
     """Map a dataset name to ``<cache_dir or get_cache_dir()>/<name><suffix>``.
+
+    A name ending in ``/`` is a :class:`~stable_worldmodel.errors.ConfigError` unless it names the
+    folder of a sharded dataset (``"x/"`` + suffix would be the hidden file ``x/.h5``).
 
     ``name`` is taken as a path when it ends with ``suffix`` or is an existing file; names
     with folders (``"pusht/shard_0"``) stay under the cache folder. A name found only in
@@ -82,12 +94,20 @@ def resolve_dataset_path(name: str | os.PathLike, cache_dir: str | os.PathLike |
     if path.is_dir() and any(path.glob(f"shard_*{suffix}")):
         return path
     root = _root(cache_dir)
-    found = root / f"{name}{suffix}"
-    in_sub = root / DATASETS_SUBFOLDER / f"{name}{suffix}"
-    if not found.exists() and not in_sub.exists():
-        folder = root / str(name)
+    folder = root / str(name)
+    if _folder_like(str(name)):  # a sharded dataset's folder, or nothing ('x/' + suffix would be x/.h5)
         if folder.is_dir() and any(folder.glob(f"shard_*{suffix}")):
             return folder
+        from ..errors import ConfigError
+
+        raise ConfigError(
+            f"A dataset name requires no trailing {str(name)[-1]!r} (unless it names a folder of shard_*{suffix} files), "
+            f"got {str(name)!r}; did you mean {_strip_seps(str(name))!r}?"
+        )
+    found = root / f"{name}{suffix}"
+    in_sub = root / DATASETS_SUBFOLDER / f"{name}{suffix}"
+    if not found.exists() and not in_sub.exists() and folder.is_dir() and any(folder.glob(f"shard_*{suffix}")):
+        return folder
     return in_sub if not found.exists() and in_sub.exists() else found
 
 
@@ -127,6 +147,8 @@ def dataset_file(name: Any, cache_dir: str | os.PathLike | None = None, suffix: 
         raise bad("an absolute path; give a name and pass cache_dir= for the folder")
     if ".." in Path(text).parts:
         raise bad("'..' would leave the cache folder")
+    if _folder_like(text):  # Path() drops the slash: 'x/' would be written as the hidden file x/.h5
+        raise bad(f"a name ending in {text[-1]!r} names a folder; did you mean {_strip_seps(text)!r}?")
     if text.endswith(suffix):
         raise bad(f"drop the {suffix!r}, it is added")
     where = "cache_dir" if cache_dir is not None else "the cache folder"

@@ -62,8 +62,8 @@ import numpy as np
 
 from .. import keys
 from ..errors import DatasetFormatError
-from . import _superblock
-from ._index import not_a_file, read_index
+from . import _checksum, _superblock
+from ._index import H5_READ_ERRORS, damaged, not_a_file, read_index
 from ._lock import WriterLock
 
 logger = logging.getLogger(__name__)
@@ -72,6 +72,11 @@ NEXT_SEED_ATTR = "next_seed"
 COMPRESS_ROW_BYTES = 1024  # rows this big are compressed (one per chunk); smaller ones are stored raw
 NUMERIC_CHUNK_BYTES = 16 * 1024
 GZIP_LEVEL = 4
+# Raw chunks with HDF5's Fletcher-32 checksum (compressed ones always have zlib's Adler-32). Off:
+# an append rewrites the partly filled raw chunk whole, and a kill -9 in the middle of that write
+# can leave it failing its checksum, so plain h5py (and HDF5Dataset) refuse its committed rows
+# until a writer resumes the file (see _checksum); bench/bench_checksum.py measures the cost.
+CHECKSUM_RAW = False
 INDEX_COLUMNS = (keys.EP_LEN, keys.EP_OFFSET)
 
 
@@ -99,6 +104,8 @@ def column_storage(row_shape: tuple[int, ...], dtype: np.dtype) -> dict[str, Any
     * smaller rows are stored uncompressed in chunks of about :data:`NUMERIC_CHUNK_BYTES`, with
       no fill value and no chunk cache (see :meth:`HDF5Writer._open`), so HDF5 writes exactly
       the bytes of the appended rows into the chunk and never touches the rows before them.
+      With :data:`CHECKSUM_RAW` they carry a Fletcher-32 checksum instead, and an append rewrites
+      the chunk whole, in place, its committed rows with the bytes they hold (see :mod:`._checksum`).
     """
     dtype = np.dtype(dtype)
     row_bytes = max(int(np.prod(row_shape, dtype=np.int64)) * dtype.itemsize, 1)
@@ -110,7 +117,7 @@ def column_storage(row_shape: tuple[int, ...], dtype: np.dtype) -> dict[str, Any
             shuffle=not is_image_column(row_shape, dtype) and dtype.itemsize > 1,
         )
     rows = 1 << ((NUMERIC_CHUNK_BYTES // row_bytes).bit_length() - 1)  # a power of two
-    return dict(chunks=(max(rows, 1), *row_shape), fillvalue=None, fill_time="never")
+    return dict(chunks=(max(rows, 1), *row_shape), fillvalue=None, fill_time="never", fletcher32=CHECKSUM_RAW)
 
 
 def _write_rows(dset, start: int, rows: np.ndarray) -> None:
@@ -186,23 +193,35 @@ class HDF5Writer:
         try:
             f = self._open(_superblock.SealedFile(self.path), "r+")
         except OSError as exc:
+            if _superblock.truncation(self.path):
+                raise damaged("HDF5Writer", self.path, exc) from exc
             raise DatasetFormatError(f"HDF5Writer requires a readable HDF5 file, got {self.path}: {exc}") from exc
         try:
+            episodes = f[keys.EP_LEN].shape[0] if isinstance(f.get(keys.EP_LEN), self._h5py.Dataset) else 0
+            self._reseal(f, [n for n in INDEX_COLUMNS if isinstance(f.get(n), self._h5py.Dataset)], episodes)
             lengths, offsets, columns = read_index(f, self.path, "HDF5Writer")
             self._schema = {name: (tuple(f[name].shape[1:]), f[name].dtype) for name in columns}
-        except (OSError, KeyError, DatasetFormatError) as exc:
+            self.num_episodes = len(lengths)
+            self.num_rows = int(offsets[-1] + lengths[-1]) if len(lengths) else 0  # later rows (a killed commit): written over
+            self._reseal(f, columns, self.num_rows)
+        except (*H5_READ_ERRORS, DatasetFormatError) as exc:
             self.close()
             if isinstance(exc, DatasetFormatError):
                 raise
-            raise DatasetFormatError(f"HDF5Writer could not read the episode index of {self.path} (damaged?): {exc}") from exc
-        self.num_episodes = len(lengths)
-        self.num_rows = int(offsets[-1] + lengths[-1]) if len(lengths) else 0  # later rows (a killed commit): written over
+            raise damaged("HDF5Writer", self.path, exc) from exc
         seed = f.attrs.get(NEXT_SEED_ATTR)
         self.next_seed = None if seed is None or int(seed) < 0 else int(seed)
         if NEXT_SEED_ATTR not in f.attrs:
             f.attrs[NEXT_SEED_ATTR] = np.int64(-1)
         self._start_swmr()
         self._raise_io_error("resume")
+
+    def _reseal(self, f, names: Sequence[str], end: int) -> None:
+        """Fresh checksums on the chunks of ``names`` past row ``end`` that a killed commit tore (see :mod:`._checksum`)."""
+        for name in names:
+            fixed = _checksum.reseal(f[name], end)
+            if fixed:
+                logger.warning("%s: re-sealed %d chunk(s) of column %r from row %d, torn by a killed commit", self.path, len(fixed), name, fixed[0])
 
     def _create(self, episode: Mapping[str, np.ndarray]) -> None:
         partial = self.path.with_name(f".{self.path.name}.partial")  # renamed once it is a valid file
