@@ -65,6 +65,12 @@ def report(exc: BaseException, code: int) -> int:
     return code
 
 
+def warn(message: str) -> None:
+    """Write ``message`` to stderr as one ``Warning: ...`` line (a warning the command goes on after)."""
+    sys.stderr.write("Warning: " + one_line(message) + "\n")
+    sys.stderr.flush()
+
+
 def check_choice(what: str, value: str, accepted: Iterable[str], aliases: dict[str, str] | None = None) -> str:
     """Return ``value`` (or its alias target) when accepted, else raise a "did you mean" error."""
     accepted = list(accepted)

@@ -24,6 +24,13 @@ VariationOpt = Annotated[
 ]
 
 
+EvalImageSizeOpt = Annotated[
+    int | None,
+    typer.Option("--image-size", parser=int_in(8, 1024), metavar="S", help="Side of the square images (pixels; default: what a wm:/gc: run was trained on, else 64).", show_default=False),
+]
+ForceOpt = Annotated[bool, typer.Option("--force", help="Evaluate a wm:/gc: run on an env or image size other than its own without a word (no warning, no error).")]
+
+
 RayOpt = Annotated[bool, typer.Option("--ray", help="Spread the episodes over Ray tasks (a private local Ray on this machine unless --ray-address).")]
 RayAddressOpt = Annotated[str | None, typer.Option("--ray-address", metavar="ADDRESS", help="Ray cluster to use (HOST:PORT or 'auto'); implies --ray.", show_default=False)]
 
@@ -119,7 +126,7 @@ def eval_cmd(
     video: Annotated[Path | None, typer.Option("--video", metavar="DIR", help="Also write one MP4 per env of a rollout into this folder.", file_okay=False)] = None,
     num_envs: NumEnvsOpt = 1,
     max_steps: MaxStepsOpt = None,
-    image_size: ImageSizeOpt = 64,
+    image_size: EvalImageSizeOpt = None,
     solver: Annotated[str, typer.Option("--solver", metavar="NAME", help="Planner of wm: policies: cem, icem, mppi, gd or random.")] = "cem",
     horizon: Annotated[int, typer.Option("--horizon", parser=int_in(1), metavar="H", help="Planned action blocks (wm: policies).")] = 5,
     receding_horizon: Annotated[int, typer.Option("--receding-horizon", parser=int_in(1), metavar="R", help="Blocks executed before replanning (MPC; at most H).")] = 1,
@@ -139,6 +146,7 @@ def eval_cmd(
     plot: Annotated[Path | None, typer.Option("--plot", metavar="FILE", help="With --fov-sweep: where the heatmap PNG goes (default: beside --json, else fov-sweep-ENV.png).", dir_okay=False, show_default=False)] = None,
     ray: RayOpt = False,
     ray_address: RayAddressOpt = None,
+    force: ForceOpt = False,
 ) -> None:
     """Evaluate a policy on ENV and print its success rate with a 95% confidence interval.
 
@@ -148,7 +156,7 @@ def eval_cmd(
     """
     from .display import console, success_table
     from .evaluation import evaluate_cli
-    from .worlds import check_policy, episode_limit, resolve_env
+    from .worlds import check_policy, check_run_fits, episode_limit, resolve_env, run_image_size
 
     env = resolve_env(env)
     if (ray or ray_address) and (video is not None or from_dataset is not None):
@@ -159,6 +167,7 @@ def eval_cmd(
         policies = [check_policy(p.strip()) for p in policy.split(",") if p.strip()]
     else:
         policy = check_policy(policy)
+    checked = policies if fov_sweep is not None else [policy]
     if video is not None:
         video = output_dir(video, "swm eval --video")
     if json_path is not None:
@@ -166,13 +175,17 @@ def eval_cmd(
     if decoder is not None and (video is None or not policy.startswith("wm:")):
         raise typer.BadParameter("requires --video DIR and a wm:RUN policy (it decodes what the model predicts)", param_hint="--decoder")
     plan = None
-    if any(p.startswith("wm:") for p in (policies if fov_sweep is not None else [policy])):
+    if any(p.startswith("wm:") for p in checked):
         from ..planning.learned import PlanSettings
 
         plan = PlanSettings(solver=solver, horizon=horizon, receding_horizon=receding_horizon, samples=samples, iterations=iterations, seed=seed, cost=cost,
                             subgoals=subgoals, lookahead=lookahead, patience=patience)
     elif subgoals != "auto" or lookahead is not None or patience is not None:
         raise typer.BadParameter("applies to wm:RUN policies only", param_hint="--subgoals/--lookahead/--patience")
+    if image_size is None:
+        image_size = run_image_size(checked)
+    for name in checked:  # once, before any World starts
+        check_run_fits(name, env, image_size, force=force)
     max_steps = episode_limit(env, max_steps)
     out = console()
     if fov_sweep is not None:
@@ -261,6 +274,7 @@ def sweep(
     plot: Annotated[Path | None, typer.Option("--plot", metavar="DIR", help="Write one heatmap PNG per env into DIR (default: beside --json).", file_okay=False, show_default=False)] = None,
     ray: RayOpt = False,
     ray_address: RayAddressOpt = None,
+    force: ForceOpt = False,
 ) -> None:
     """Evaluate every policy on every env in every factor setting of a YAML file, on the same seeds:
     one table per env, heatmaps and one JSON (--ray spreads the episodes over Ray).
@@ -273,10 +287,15 @@ def sweep(
     from .display import console
     from .evaluation import evaluate_cli
     from .sweep import load_sweep_file, run_sweep_file, sweep_heatmap, sweep_json, sweep_table
-    from .worlds import check_policy
+    from .worlds import check_policy, check_run_fits, resolve_env, run_image_size
 
     spec = load_sweep_file(file)
     spec["policies"] = [check_policy(p) for p in spec["policies"]]
+    if spec["image_size"] is None:
+        spec["image_size"] = run_image_size(spec["policies"])
+    for env in spec["envs"]:  # once per env and run, before any World starts
+        for policy in spec["policies"]:
+            check_run_fits(policy, resolve_env(env), spec["image_size"], force=force, image_option="image_size: ")
     plan = PlanSettings(**{"seed": spec["seed"], **spec["plan"]}) if any(p.startswith("wm:") for p in spec["policies"]) else None
     if json_path is not None:
         json_path = output_file(json_path, "swm sweep --json")

@@ -147,7 +147,7 @@ def sweep_heatmap(report: dict[str, Any], path: Path) -> Path:
 #: keys of a sweep file and their defaults (``envs`` and ``policies`` are required)
 SWEEP_KEYS = {
     "envs": None, "policies": None, "factors": ["none"], "episodes": 20, "seed": 0, "num_envs": 1,
-    "max_steps": None, "image_size": 64, "device": "auto", "plan": {},
+    "max_steps": None, "image_size": None, "device": "auto", "plan": {},
 }
 
 
@@ -155,7 +155,8 @@ def load_sweep_file(path: Path) -> dict[str, Any]:
     """The settings of sweep file ``path`` (YAML), checked, defaults filled in.
 
     ``factors`` lists the settings evaluated for every env and policy: ``none`` (in distribution),
-    a factor or group name, ``all``, or a list of names resampled together.
+    a factor or group name, ``all``, or a list of names resampled together. ``image_size`` left
+    out stays None: ``swm sweep`` takes what the first ``wm:`` / ``gc:`` run was trained on, else 64.
     """
     import yaml
 
@@ -178,6 +179,8 @@ def load_sweep_file(path: Path) -> dict[str, Any]:
         if not isinstance(value, list) or not value:
             raise ConfigError(f"swm sweep requires {key!r} to be a non-empty list, got {value!r}")
     for key in ("episodes", "seed", "num_envs", "image_size"):
+        if key == "image_size" and out[key] is None:  # what the first wm:/gc: run was trained on, else 64
+            continue
         if isinstance(out[key], bool) or not isinstance(out[key], int) or out[key] < (0 if key == "seed" else 1):
             raise ConfigError(f"swm sweep requires {key!r} to be an integer >= {0 if key == 'seed' else 1}, got {out[key]!r}")
     if not isinstance(out["plan"], dict):

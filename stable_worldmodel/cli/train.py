@@ -30,7 +30,69 @@ def _config_override(value: str) -> tuple[str, object]:
         raise typer.BadParameter(str(exc)) from None
 
 
+#: the train() arguments that are also flags of swm train (``--set KEY=VALUE`` routes there): key -> flag
+FLAGS = {
+    "model": "MODEL", "dataset": "--dataset", "preset": "--preset", "steps": "--steps", "epochs": "--epochs",
+    "batch_size": "--batch-size", "lr": "--lr", "device": "--device", "precision": "--precision", "name": "--name",
+    "seed": "--seed", "resume": "--resume", "frameskip": "--frameskip", "source": "--from",
+}
+#: how a ``--set`` value of a flag is checked: what the flag's own parser accepts
+_FLAG_PARSERS = {
+    "steps": int_in(1), "batch_size": int_in(1), "seed": int_in(0), "frameskip": int_in(1),
+    "lr": _float_pos, "epochs": _float_pos,
+}
+
+
+def _set_value(key: str, value: object) -> object:
+    """A ``--set`` value of flag ``key`` checked and converted as the flag would be."""
+    from ..errors import ConfigError
+
+    parse = _FLAG_PARSERS.get(key)
+    if parse is None:
+        if key in ("model", "dataset", "preset", "device", "precision", "name", "source") and not isinstance(value, str):
+            raise ConfigError(f"swm train --set {key} requires a name, got {value!r}; or use {FLAGS[key]}")
+        if key == "resume" and not isinstance(value, bool):
+            raise ConfigError(f"swm train --set resume requires true or false, got {value!r}; or use --resume")
+        return value
+    if isinstance(value, bool) or not isinstance(value, (int, float, str)):
+        raise ConfigError(f"swm train --set {key} requires a number, got {value!r}")
+    try:
+        return parse(str(value))
+    except (ValueError, typer.BadParameter) as exc:
+        text = (exc.message if isinstance(exc, typer.BadParameter) else str(exc)).replace("expected ", "requires ", 1)
+        raise ConfigError(f"swm train --set {key} {text}") from None
+
+
+def merge_settings(flags: dict[str, object], given: set[str], settings: dict[str, object]) -> tuple[dict[str, object], dict[str, object]]:
+    """``(flags, overrides)``: ``--set`` items of :data:`FLAGS` keys moved into ``flags`` (the same
+    place as the flag), the others left as config overrides. A key set by both its flag (in
+    ``given``) and ``--set`` must have one value, else :class:`~stable_worldmodel.errors.ConfigError`
+    naming both."""
+    from ..errors import ConfigError
+
+    flags, overrides = dict(flags), {}
+    for key, value in settings.items():
+        if key not in FLAGS:
+            overrides[key] = value
+            continue
+        value = _set_value(key, value)
+        if key in given and flags[key] != value:
+            raise ConfigError(
+                f"swm train requires one value for {key}, got {FLAGS[key]} {flags[key]!r} and --set {key}={value!r}; "
+                f"drop one of them"
+            )
+        flags[key] = value
+    return flags, overrides
+
+
+def _given(ctx: typer.Context, param: str) -> bool:
+    """Whether option ``param`` came from the command line (or an env var), not its default."""
+    source = ctx.get_parameter_source(param)
+    return source is not None and source.name not in ("DEFAULT", "DEFAULT_MAP")
+
+
 def train_cmd(
+    ctx: typer.Context,
     model: Annotated[str, typer.Argument(help="Model to train: lewm, pldm, prejepa, tdmpc2, dreamer, dummy (world models), gcbc, gcivl, gciql (goal-conditioned policies) or frame (a decoder of another run's latents, with --from RUN).", metavar="MODEL", show_default=False)],
     dataset: Annotated[str | None, typer.Option("--dataset", "-d", metavar="NAME", help="Dataset in the cache (see `swm list dataset`); a frame decoder defaults to its source run's.", show_default=False)] = None,
     preset: Annotated[str, typer.Option("--preset", metavar="PRESET", help="Sizes and recipe: tiny (CPU, minutes), small (GPU), paper (upstream's).")] = "tiny",
@@ -45,7 +107,7 @@ def train_cmd(
     resume: Annotated[bool, typer.Option("--resume", help="Continue the run RUN from its last checkpoint.")] = False,
     frameskip: Annotated[int | None, typer.Option("--frameskip", parser=int_in(1), metavar="K", help="Env steps per model step (the action block).", show_default=False)] = None,
     source: Annotated[str | None, typer.Option("--from", metavar="RUN", help="frame only: the run whose latents the decoder learns to turn into frames (run name default: RUN-frame).", show_default=False)] = None,
-    settings: Annotated[list[str] | None, typer.Option("--set", metavar="KEY=VALUE", help="A config field of the model (repeatable), e.g. --set proprio_dim=2; VALUE is read as JSON when it parses (see `swm show model MODEL` for the fields).", show_default=False)] = None,
+    settings: Annotated[list[str] | None, typer.Option("--set", metavar="KEY=VALUE", help="A config field of the model (repeatable), e.g. --set proprio_dim=2; VALUE is read as JSON when it parses (see `swm show model MODEL` for the fields). A key that is also a flag (lr, steps, batch_size, seed, device, frameskip...) sets that flag: giving both takes one value.", show_default=False)] = None,
 ) -> None:
     """Train MODEL on a recorded dataset; the checkpoint goes to $STABLEWM_HOME/checkpoints/RUN.
 
@@ -62,18 +124,21 @@ def train_cmd(
     from ..wm import get_config_class
     from .display import console
 
-    overrides = dict(_config_override(item) for item in settings or [])
-    if frameskip is not None:
-        overrides["frameskip"] = frameskip
-    if source is not None:
-        overrides["source"] = source
+    flags = {"model": model, "dataset": dataset, "preset": preset, "steps": steps, "epochs": epochs, "batch_size": batch_size,
+             "lr": lr, "device": device, "precision": precision, "name": name, "seed": seed, "resume": resume,
+             "frameskip": frameskip, "source": source}
+    given = {k for k in flags if k != "model" and _given(ctx, k)} | {"model"}
+    flags, overrides = merge_settings(flags, given, dict(_config_override(item) for item in settings or []))
+    model, dataset, preset, source = flags.pop("model"), flags.pop("dataset"), flags.pop("preset"), flags["source"]
+    for key in ("frameskip", "source"):  # config fields
+        if flags[key] is not None:
+            overrides[key] = flags[key]
+        del flags[key]
     if dataset is None and source is None:
         raise typer.BadParameter("requires --dataset NAME (or --from RUN for a frame decoder)", param_hint="--dataset")
+    overrides.setdefault("progress", sys.stderr.isatty())
     out = console()
-    result = train(
-        model, dataset, preset, steps=steps, epochs=epochs, batch_size=batch_size, lr=lr, device=device,
-        precision=precision, name=name, seed=seed, resume=resume, progress=sys.stderr.isatty(), **overrides,
-    )
+    result = train(model, dataset, preset, **flags, **overrides)
     if os.environ.get("RANK", "0") != "0":  # torchrun: process 0 reports
         return
     val = f"{result.val_loss:.4f}" if result.val_loss is not None else "n/a"

@@ -155,6 +155,58 @@ def make_policy(
     return expert_policy(env_id) if noise is None else expert_policy(env_id, noise=noise, seed=seed)
 
 
+#: side of the square images of a command with no checkpoint policy to take it from
+DEFAULT_IMAGE_SIZE = 64
+
+
+def run_image_size(policies: Sequence[str]) -> int:
+    """The side of the frames the first ``wm:`` / ``gc:`` run of ``policies`` was trained on
+    (:data:`DEFAULT_IMAGE_SIZE` when there is none, or it does not record one)."""
+    from ..planning.run_fit import run_facts
+
+    for name in policies:
+        run = checkpoint_run(name)
+        if run is not None:
+            frame = run_facts(run)[0].frame_size
+            if frame is not None:
+                return int(frame[0])
+    return DEFAULT_IMAGE_SIZE
+
+
+def check_run_fits(policy: str, env_id: str, image_size: int, *, force: bool = False,
+                   image_option: str = "--image-size ") -> None:
+    """For a ``wm:`` / ``gc:`` policy: raise :class:`~stable_worldmodel.errors.RunMismatchError`
+    when its run cannot act on ``env_id`` at ``image_size`` (another action dimension, or other
+    frames unless ``force``), and write one ``Warning:`` line per thing it never saw (another env
+    id: silenced by ``force``) and one when the run is partial (the checkpoint of step N of M).
+    Done once per command, before any World starts."""
+    run = checkpoint_run(policy)
+    if run is None:
+        return
+    from ..planning import run_fit
+    from .errors import warn
+
+    facts, protocol = run_fit.run_facts(run)
+    lines = run_fit.check_run_fits(facts, policy, env_id=env_id, action_dim=env_action_dim(env_id),
+                                   image_size=image_size, force=force, image_option=image_option)
+    note = run_fit.partial_note(policy, protocol)
+    for line in [*lines, *([note] if note else [])]:
+        warn(line)
+
+
+def env_action_dim(env_id: str) -> int | None:
+    """Numbers in one action of ``env_id`` (1 for a ``Discrete`` space; None when the space has no shape)."""
+    import gymnasium as gym
+    import numpy as np
+
+    env = gym.make(env_id, disable_env_checker=True)
+    try:
+        shape = env.action_space.shape
+        return None if shape is None else int(np.prod(shape))
+    finally:
+        env.close()
+
+
 def check_factors(world: World, factors: Sequence[str]) -> list[str]:
     """``factors`` (``"all"``, a factor name or a group such as ``agent``) checked against the world's variation space."""
     factors = list(factors)

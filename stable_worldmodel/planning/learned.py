@@ -125,7 +125,9 @@ def world_model_policy(
     cache_dir: str | None = None,
     frameskip: int | None = None,
 ) -> tuple[Any, dict[str, Any]]:
-    """``(policy, protocol)`` for checkpoint ``run`` (see the module docstring).
+    """``(policy, protocol)`` for checkpoint ``run`` (see the module docstring). ``frameskip``
+    (the action block) defaults to the run's; another than the one it recorded is a
+    :class:`~stable_worldmodel.errors.RunMismatchError`.
 
     The World must give the model ``pixels`` and ``goal`` infos with ``history_size`` 1.
     """
@@ -145,6 +147,10 @@ def world_model_policy(
                           f"(it plans on its own cost); use cost='auto'")
     if hasattr(model, "goal_cost"):
         model.goal_cost = "min" if settings.cost == "auto" else settings.cost
+    if frameskip is not None:  # another block than the run's: its model takes actions of another size
+        from .run_fit import RunFacts, check_run_fits
+
+        check_run_fits(RunFacts.from_protocol(run, protocol), "world_model_policy", frameskip=frameskip)
     block = int(frameskip or protocol.get("frameskip", 1))
     config = PlanConfig(
         horizon=settings.horizon, receding_horizon=settings.receding_horizon or settings.horizon,

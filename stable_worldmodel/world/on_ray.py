@@ -37,6 +37,8 @@ from ..errors import ConfigError
 #: Ray's unix sockets live under its temp dir: paths longer than this leave them too little room
 MAX_TEMP_DIR = 40
 MANIFEST = "manifest.json"
+#: seconds to wait for a cluster at ``HOST:PORT`` to accept a connection
+RAY_CONNECT_TIMEOUT = 5.0
 
 
 def ray_temp_dir(cache_dir: str | os.PathLike | None = None) -> Path:
@@ -64,8 +66,17 @@ def init_ray(address: str | None = None, *, num_cpus: int | None = None, cache_d
     if ray.is_initialized():
         return ray
     if address:
-        ray.init(address=address, log_to_driver=False, configure_logging=False)
-        return ray
+        why = _unreachable(address)  # Ray itself waits for ever on a HOST:PORT where nothing listens
+        if why is None:
+            try:
+                ray.init(address=address, log_to_driver=False, configure_logging=False)
+                return ray
+            except ConnectionError as exc:  # 'auto' and no cluster: "Could not find any running Ray instance..."
+                why = " ".join(str(exc).split()) or type(exc).__name__
+        raise ConfigError(
+            f"--ray-address requires a running Ray cluster, got {address!r} where none answers ({why}); start one "
+            f"with `ray start --head` (then --ray-address auto), or drop --ray-address to use a private local Ray"
+        )
     temp = ray_temp_dir(cache_dir)
     temp.mkdir(parents=True, exist_ok=True)
     ray.init(
@@ -73,6 +84,21 @@ def init_ray(address: str | None = None, *, num_cpus: int | None = None, cache_d
         log_to_driver=False, configure_logging=False,
     )
     return ray
+
+
+def _unreachable(address: str, timeout: float = RAY_CONNECT_TIMEOUT) -> str | None:
+    """Why nothing accepts a connection at ``address`` (``HOST:PORT``, or ``ray://HOST:PORT``), within
+    ``timeout`` seconds; None when something does, or when ``address`` is not of that form (``auto``)."""
+    import socket
+
+    host, sep, port = address.split("://", 1)[-1].rpartition(":")
+    if not sep or not host or not port.isdigit():
+        return None
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout):
+            return None
+    except OSError as exc:
+        return f"{host}:{port}: {exc.strerror or exc}"
 
 
 # -- collection ----------------------------------------------------------------------------------
