@@ -28,8 +28,6 @@ from .stats import SuccessSummary
 DEFAULT_ENV = "swm/TwoRoom-v2"
 DEFAULT_OUT = Path("demo_outputs")
 POLICY_ORDER = ("random", "expert")
-#: models the demo also evaluates with ``--subgoals graph`` (JEPA models)
-GRAPH_MODELS = ("lewm", "pldm")
 PLOT_NAME = "success_rates.png"
 RESULTS_NAME = "results.json"
 #: the evaluation seeds start here, away from the seeds of the recorded episodes
@@ -126,7 +124,7 @@ def demo(
     make_policy("expert", env)  # fail now (one line) when the env has no expert
     learn = model != "none"
     if learn:
-        from ..wm import list_models
+        from ..wm import get_config_class, list_models
 
         from .errors import check_choice
 
@@ -160,7 +158,7 @@ def demo(
         plan = PlanSettings(solver="cem", samples=samples, iterations=iterations, seed=seed, subgoals="none")
         policies.append((f"{model}+cem", f"wm:{run}", plan))
         model_record = {"run": run, "checkpoint": str(result.folder), "steps": result.steps, "train_seconds": round(result.seconds, 1), "plan": plan.as_dict()}
-        if model in GRAPH_MODELS:  # the same model and CEM, aiming at waypoints of the training data (--subgoals graph)
+        if get_config_class(model).subgoal_graph:  # the same model and CEM, aiming at waypoints of the training data
             graph = PlanSettings(solver="cem", samples=samples, iterations=iterations, seed=seed, subgoals="graph")
             policies.append((f"{model}+cem+graph", f"wm:{run}", graph))
             model_record["plan_graph"] = graph.as_dict()

@@ -172,10 +172,6 @@ def world_model_policy(
     return policy, protocol
 
 
-#: registry names of the models whose goal embedding a graph waypoint can replace (PreJEPA: without proprio)
-GRAPH_MODELS = ("lewm", "pldm", "prejepa", "dinowm", "dreamer")
-
-
 def resolve_subgoals(run: str, settings: PlanSettings, cache_dir: str | None = None, *,
                      protocol: dict | None = None, block: int | None = None) -> PlanSettings:
     """``settings`` with ``subgoals="auto"`` kept where a subgoal graph can be built for checkpoint
@@ -200,11 +196,14 @@ def resolve_subgoals(run: str, settings: PlanSettings, cache_dir: str | None = N
 
 def _graph_unavailable(protocol: dict, cache_dir: str | None) -> str | None:
     """Why a subgoal graph cannot be built for a run with ``protocol`` (None: it can)."""
+    from ..wm import get_config_class, list_models
+
     model = protocol.get("model")
-    if model not in GRAPH_MODELS:
-        return f"model {model!r} is not one of {', '.join(GRAPH_MODELS)} trained by swm train"
-    if model in ("prejepa", "dinowm") and (protocol.get("config") or {}).get("proprio_dim"):
-        return "a PreJEPA with proprio scores more than its patch features"
+    if model not in list_models():
+        return f"model {model!r} is not a registered model trained by swm train"
+    why = get_config_class(model).subgoal_graph_unavailable(protocol.get("config") or {})
+    if why:
+        return why
     if not protocol.get("dataset") or protocol.get("train_episodes") is None:
         return "its protocol names no training dataset"
     path = protocol.get("dataset_path")
@@ -266,17 +265,13 @@ class _WaypointHook:
     @staticmethod
     def keys(model: Any) -> tuple[str | None, str]:
         """The info keys the model caches its context (None: not set by the hook) and goal embeddings under."""
-        from ..wm.dreamer import Dreamer
-        from ..wm.jepa import EMB, GOAL_EMB, JEPA
-        from ..wm.prejepa.prejepa import PIXELS_EMB, PreJEPA
+        from ..wm.base import SupportsSubgoalGraph
 
-        if isinstance(model, JEPA):
-            return EMB, GOAL_EMB
-        if isinstance(model, PreJEPA) and not model.state_keys:
-            return PIXELS_EMB, f"pixels_{GOAL_EMB}"
-        if isinstance(model, Dreamer):
-            return None, GOAL_EMB
-        raise ConfigError(f"subgoals='graph' requires LeWM, PLDM, Dreamer or a PreJEPA without proprio, got {type(model).__name__}")
+        if not isinstance(model, SupportsSubgoalGraph):
+            raise ConfigError(
+                f"subgoals='graph' requires a model with subgoal_keys() (LeWM, PLDM, Dreamer, PreJEPA), got {type(model).__name__}"
+            )
+        return model.subgoal_keys()
 
     @classmethod
     def check(cls, model: Any, run: str) -> None:
@@ -331,7 +326,9 @@ def attach_prediction_panel(policy: Any, run: str, decoder: str | None = None, *
     name = decoder or f"{run}-frame"
     if decoder is None and not (checkpoint_root(cache_dir) / name).is_dir():
         model = policy.solver.model
-        if not getattr(model, "decodes_frames", False):
+        from ..wm.base import DecodesFrames
+
+        if not (isinstance(model, DecodesFrames) and model.decodes_frames):
             return None
         protocol = read_protocol(resolve_checkpoint(run, cache_dir))
         policy.prediction_panel = PredictionPanel(model, None, protocol.get("image_mean", (0.5,) * 3),

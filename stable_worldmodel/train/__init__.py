@@ -14,6 +14,7 @@ import math
 from typing import TYPE_CHECKING, Any
 
 from ..errors import ConfigError
+from ..wm.base import DerivedFromRun, HasFrozenEncoder
 
 if TYPE_CHECKING:  # pragma: no cover
     from .trainer import TrainResult
@@ -99,12 +100,13 @@ def train(
     if lr is not None:
         overrides["lr"] = lr
     cfg = get_config(model, preset, **overrides)
+    derived = isinstance(cfg, DerivedFromRun)  # e.g. the frame decoder: built on another run
     if dataset is None:  # a frame decoder trains on its source run's dataset
-        dataset = getattr(cfg, "source_dataset", None)
+        dataset = cfg.source_dataset if derived else None
         if not dataset:
             raise ConfigError(f"train requires a dataset name for {model!r}, got None")
     dist_info, dev = distributed.setup(resolve_device(device), cfg.batch_size)
-    run = name or getattr(cfg, "default_run", None) or f"{dataset}-{model}"
+    run = name or (cfg.default_run if derived else None) or f"{dataset}-{model}"
     if not run or "/" in run or "\\" in run or run.startswith("."):
         raise ConfigError(f"train requires a plain run name (no path), got {run!r}")
     folder = wmu.checkpoint_root(cache_dir) / run
@@ -196,21 +198,21 @@ def _train_locked(*, model, dataset, preset, steps, epochs, precision, seed, res
     tree = cfg.target_tree(data.action_dim)
     torch.manual_seed(seed)
     net = wmu.instantiate(tree)
-    if callable(getattr(cfg, "prepare_model", None)):  # e.g. the frame decoder loads its source run
+    if isinstance(cfg, DerivedFromRun):  # e.g. the frame decoder loads its source run
         cfg.prepare_model(net)
     features = None
-    frozen = getattr(net, "frozen_encoder", None)
+    frozen = isinstance(net, HasFrozenEncoder)
     # statistics of the data (a frozen encoder's standardization, Dreamer's mean frame) are learned here, once
     from .features import fit_frozen_encoder
 
-    if fit_frozen_encoder((frozen() if callable(frozen) else net).to(dev), data.dataset, data.train_episodes, cfg, dev):
-        logger.info("%s fitted to the training frames of %s", "Frozen encoder" if callable(frozen) else "Model", dataset)
-    if feature_cache and callable(frozen) and not data.goals:
+    if fit_frozen_encoder((net.frozen_encoder() if frozen else net).to(dev), data.dataset, data.train_episodes, cfg, dev):
+        logger.info("%s fitted to the training frames of %s", "Frozen encoder" if frozen else "Model", dataset)
+    if feature_cache and frozen and not data.goals:
         from .features import load_or_compute_features
 
         if not dist_info.is_main:
             distributed.barrier(dist_info)  # process 0 computes the cache, the others read it
-        features = load_or_compute_features(data.dataset, net.to(dev).encode_pixels, frozen(), cfg, dev)
+        features = load_or_compute_features(data.dataset, net.to(dev).encode_pixels, net.frozen_encoder(), cfg, dev)
         if dist_info.is_main:
             distributed.barrier(dist_info)
         data.use_features(features.features)

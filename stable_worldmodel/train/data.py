@@ -51,11 +51,8 @@ def split_episodes(num_episodes: int, val_fraction: float, seed: int) -> tuple[n
 
 def extra_columns(cfg: Any) -> dict[str, int]:
     """The dataset columns besides pixels and actions that a config's model reads, with their
-    widths: ``cfg.extra_columns`` when the config has it, else ``proprio`` when ``cfg.proprio_dim > 0``."""
-    columns = getattr(cfg, "extra_columns", None)
-    if columns is None:
-        columns = {keys.PROPRIO: cfg.proprio_dim} if getattr(cfg, "proprio_dim", 0) else {}
-    return {str(k): int(v) for k, v in dict(columns).items()}
+    widths (``cfg.extra_columns``, :class:`~stable_worldmodel.wm.base.WorldModelConfig`)."""
+    return {str(k): int(v) for k, v in dict(cfg.extra_columns).items()}
 
 
 class TrainData:
@@ -88,9 +85,9 @@ class TrainData:
             raise DatasetFormatError(
                 f"Training requires dataset columns {missing} in {self.dataset.path}, got {sorted(self.dataset.column_names)}"
             )
-        self.needs_reward = bool(getattr(cfg, "needs_reward", False))
+        self.needs_reward = bool(cfg.needs_reward)
         if self.needs_reward and keys.REWARD not in self.dataset.column_names:
-            model = getattr(cfg, "model_name", "") or type(cfg).__name__
+            model = cfg.model_name or type(cfg).__name__
             raise DatasetFormatError(
                 f"Training {model} requires a {keys.REWARD!r} column, got none in dataset {str(name)!r} ({self.dataset.path}), "
                 f"whose columns are {sorted(self.dataset.column_names)}. Record one: World.record_dataset(...) and "

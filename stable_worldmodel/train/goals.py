@@ -17,25 +17,14 @@ of a run are reproduced by its seed (and by a resumed run).
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Protocol, runtime_checkable
 
 import numpy as np
 import torch
 
+from ..wm.base import GoalConditioned
 from ..wm.gcrl.config import GOAL_SAMPLING, check_goal_probabilities
 
 __all__ = ["GoalConditioned", "GoalSampler"]
-
-
-@runtime_checkable
-class GoalConditioned(Protocol):
-    """A model config whose training batches carry hindsight goals (``GCRLConfig``)."""
-
-    goal_probabilities: Mapping[str, float]
-    actor_goal_probabilities: Mapping[str, float]
-    goal_gamma: float
-    history_size: int
-    frameskip: int
 
 
 class GoalSampler:

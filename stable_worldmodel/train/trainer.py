@@ -22,6 +22,7 @@ from typing import Any
 import torch
 
 from ..errors import ConfigError
+from ..wm.base import HasValidationLoss
 from ..wm import utils as wmu
 from . import distributed
 from .distributed import DistInfo
@@ -211,7 +212,8 @@ class Trainer:
         was_training = self.model.training
         self.model.eval()
         total, count = 0.0, 0
-        key = getattr(self.model, "validation_loss", "loss")  # e.g. TD-MPC2: its world model's part, without the actor's
+        # e.g. TD-MPC2: its world model's part, without the actor's
+        key = self.model.validation_loss if isinstance(self.model, HasValidationLoss) else "loss"
         with torch.no_grad(), self._autocast():
             for index in batches:
                 out = self.model.loss(self.data.batch(index))

@@ -1,17 +1,29 @@
-"""Light configuration of the JEPA world models (no torch import): sizes, data protocol and
-training recipe, with named presets. A config renders the ``_target_`` tree that builds the
-model (:meth:`JEPAConfig.target_tree`), which is also what ``config.json`` of a checkpoint holds.
+"""Light configuration of the world models (no torch import), built on
+:class:`~stable_worldmodel.wm.base.WorldModelConfig` (what every model shares): the parts a model
+may have (:class:`ImageEncoderConfig`, :class:`PredictorConfig`) and the JEPA family's config
+(:class:`JEPAConfig`: LeWM, PLDM). A config renders the ``_target_`` tree that builds the model
+(:meth:`JEPAConfig.target_tree`), which is also what ``config.json`` of a checkpoint holds.
 """
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from ..errors import ConfigError, did_you_mean
+from .base import WorldModelConfig, check_positive_int
 
-__all__ = ["JEPAConfig", "IMAGENET_MEAN", "IMAGENET_STD", "VIT_SIZES", "GOAL_COSTS", "parse_override"]
+__all__ = [
+    "GOAL_COSTS",
+    "IMAGENET_MEAN",
+    "IMAGENET_STD",
+    "VIT_SIZES",
+    "ImageEncoderConfig",
+    "JEPAConfig",
+    "PredictorConfig",
+    "WorldModelConfig",
+    "parse_override",
+]
 
 IMAGENET_MEAN = (0.485, 0.456, 0.406)
 IMAGENET_STD = (0.229, 0.224, 0.225)
@@ -49,95 +61,53 @@ def parse_override(text: str) -> tuple[str, Any]:
         return key.strip(), raw
 
 @dataclass
-class JEPAConfig:
-    """Sizes and recipe of a JEPA world model (LeWM, PLDM).
+class PredictorConfig(WorldModelConfig):
+    """A config with a transformer predictor (or transformer heads): ``depth`` layers of ``heads``
+    heads of ``dim_head``, MLP ``mlp_dim``, ``dropout``."""
 
-    Model: ``encoder`` ("cnn" or "vit"), ``image_size``, ``embed_dim`` (D), CNN ``cnn_width``,
-    ViT ``vit_size`` / ``patch_size`` / ``vit_overrides`` (ViTConfig fields), predictor
-    ``depth`` / ``heads`` / ``dim_head`` / ``mlp_dim`` / ``dropout``, ``projector_hidden``
-    (0: no projector heads). Data protocol: ``history_size`` context frames and
-    ``num_preds`` predicted frames per sample (``num_steps = history_size + num_preds``),
-    ``frameskip`` env steps per frame (the action block), ``image_mean`` / ``image_std``.
-    Training: ``batch_size``, ``lr``, ``weight_decay``, ``warmup_steps``, ``steps``,
-    ``grad_clip``, ``val_fraction``, ``encoder_lr_scale``.
-    """
-
-    model_name: ClassVar[str] = ""
-    target: ClassVar[str] = ""
-    presets: ClassVar[dict[str, dict[str, Any]]] = {}
-    #: how ``swm eval --policy <prefix>:RUN`` uses a checkpoint: ``wm`` plans with it, ``gc`` acts with it
-    eval_prefix: ClassVar[str] = "wm"
-
-    encoder: str = "cnn"
-    image_size: int = 64
-    embed_dim: int = 64
-    cnn_width: int = 8
-    vit_size: str = "tiny"
-    patch_size: int = 8
-    vit_overrides: dict[str, Any] = field(default_factory=dict)
     depth: int = 2
     heads: int = 4
     dim_head: int = 16
     mlp_dim: int = 256
     dropout: float = 0.0
-    projector_hidden: int = 256
-    history_size: int = 1
-    num_preds: int = 1
-    frameskip: int = 5
-    image_mean: tuple[float, ...] = (0.5, 0.5, 0.5)
-    image_std: tuple[float, ...] = (0.5, 0.5, 0.5)
-    batch_size: int = 64
-    lr: float = 1e-3
-    weight_decay: float = 1e-3
-    warmup_steps: int = 100
-    steps: int = 2000
-    grad_clip: float = 1.0
-    val_fraction: float = 0.1
-    encoder_lr_scale: float = 1.0
 
     def __post_init__(self) -> None:
+        super().__post_init__()
+        name = type(self).__name__
+        for key in ("depth", "heads", "dim_head", "mlp_dim"):
+            check_positive_int(name, key, getattr(self, key))
+        if not 0.0 <= self.dropout < 1.0:
+            raise ConfigError(f"{name} requires 0 <= dropout < 1, got {self.dropout!r}")
+
+    def transformer_sizes(self) -> dict[str, Any]:
+        """The predictor transformer's size arguments (``depth``, ``heads``, ``mlp_dim``, ``dim_head``, dropouts)."""
+        return {"depth": self.depth, "heads": self.heads, "mlp_dim": self.mlp_dim, "dim_head": self.dim_head,
+                "dropout": self.dropout, "emb_dropout": 0.0}
+
+
+@dataclass
+class ImageEncoderConfig(WorldModelConfig):
+    """A config with a trained image encoder: ``encoder`` ("cnn" or "vit"), ``embed_dim`` (D; the
+    CNN's output width), CNN ``cnn_width``, ViT ``vit_size`` / ``patch_size`` / ``vit_overrides``
+    (ViTConfig fields)."""
+
+    encoder: str = "cnn"
+    embed_dim: int = 64
+    cnn_width: int = 8
+    vit_size: str = "tiny"
+    patch_size: int = 8
+    vit_overrides: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
         name = type(self).__name__
         if self.encoder not in ("cnn", "vit"):
             raise ConfigError(f"{name} requires encoder 'cnn' or 'vit', got {self.encoder!r}.{did_you_mean(self.encoder, ['cnn', 'vit'])}")
-        for key in ("image_size", "embed_dim", "cnn_width", "patch_size", "depth", "heads", "dim_head", "mlp_dim",
-                    "history_size", "num_preds", "frameskip", "batch_size", "steps"):
-            value = getattr(self, key)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ConfigError(f"{name} requires {key} to be a positive int, got {value!r}")
-        for key in ("projector_hidden", "warmup_steps"):
-            value = getattr(self, key)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-                raise ConfigError(f"{name} requires {key} to be an int >= 0, got {value!r}")
-        if not 0.0 < self.lr < 1.0 or self.weight_decay < 0 or self.grad_clip < 0:
-            raise ConfigError(f"{name} requires 0 < lr < 1, weight_decay >= 0 and grad_clip >= 0, got {self.lr}, {self.weight_decay}, {self.grad_clip}")
-        if not 0.0 <= self.val_fraction < 1.0:
-            raise ConfigError(f"{name} requires 0 <= val_fraction < 1, got {self.val_fraction!r}")
-        if not 0.0 <= self.dropout < 1.0:
-            raise ConfigError(f"{name} requires 0 <= dropout < 1, got {self.dropout!r}")
+        for key in ("embed_dim", "cnn_width", "patch_size"):
+            check_positive_int(name, key, getattr(self, key))
         if self.encoder == "vit" and self.vit_size not in VIT_SIZES:
             raise ConfigError(f"{name} requires vit_size in {sorted(VIT_SIZES)}, got {self.vit_size!r}.{did_you_mean(self.vit_size, VIT_SIZES)}")
-        self.image_mean, self.image_std = tuple(self.image_mean), tuple(self.image_std)
 
-    @property
-    def num_steps(self) -> int:
-        """Frames per training sample: ``history_size + num_preds``."""
-        return self.history_size + self.num_preds
-
-    @classmethod
-    def from_preset(cls, preset: str = "tiny", **overrides: Any) -> JEPAConfig:
-        """The config of ``preset`` with ``overrides`` (unknown fields get a "did you mean" error)."""
-        if preset not in cls.presets:
-            raise ConfigError(f"{cls.model_name} requires preset in {sorted(cls.presets)}, got {preset!r}.{did_you_mean(preset, cls.presets)}")
-        names = {f.name for f in dataclasses.fields(cls)}
-        for key in overrides:
-            if key not in names:
-                raise ConfigError(f"{cls.__name__} has no field {key!r}.{did_you_mean(key, names)} Fields: {', '.join(sorted(names))}")
-        return cls(**{**cls.presets[preset], **overrides})
-
-    def to_dict(self) -> dict[str, Any]:
-        return dataclasses.asdict(self)
-
-    # -- the model as a _target_ tree -----------------------------------------------------------
     def encoder_tree(self) -> dict[str, Any]:
         if self.encoder == "vit":
             return {
@@ -158,11 +128,25 @@ class JEPAConfig:
             return int(self.vit_overrides.get("hidden_size", VIT_SIZES[self.vit_size]["hidden_size"]))
         return self.embed_dim
 
-    def transformer_sizes(self) -> dict[str, Any]:
-        """The predictor transformer's size arguments (``depth``, ``heads``, ``mlp_dim``, ``dim_head``, dropouts)."""
-        return {"depth": self.depth, "heads": self.heads, "mlp_dim": self.mlp_dim, "dim_head": self.dim_head,
-                "dropout": self.dropout, "emb_dropout": 0.0}
 
+@dataclass
+class JEPAConfig(ImageEncoderConfig, PredictorConfig):
+    """Sizes and recipe of a JEPA world model (LeWM, PLDM): an image encoder
+    (:class:`ImageEncoderConfig`), a transformer predictor (:class:`PredictorConfig`) and
+    ``projector_hidden`` (the projector heads' width; 0: none), over the data protocol and
+    training recipe every model shares (:class:`~stable_worldmodel.wm.base.WorldModelConfig`).
+    """
+
+    #: planning may aim at waypoints of the training data (the embedding of a frame is a goal)
+    subgoal_graph: ClassVar[bool] = True
+
+    projector_hidden: int = 256
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_positive_int(type(self).__name__, "projector_hidden", self.projector_hidden, minimum=0)
+
+    # -- the model as a _target_ tree -----------------------------------------------------------
     def _mlp(self, d_in: int, d_out: int, hidden: int, batchnorm: bool = True) -> dict[str, Any]:
         tree = {"_target_": f"{_P}.lewm.module.MLP", "input_dim": d_in, "output_dim": d_out, "hidden_dim": hidden}
         if batchnorm:

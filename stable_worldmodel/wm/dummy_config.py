@@ -5,13 +5,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
-from .config import JEPAConfig
+from .base import WorldModelConfig
 
 __all__ = ["DummyConfig"]
 
 
 @dataclass
-class DummyConfig(JEPAConfig):
+class DummyConfig(WorldModelConfig):
     """Only ``image_size``, the data protocol and the training recipe matter (one preset, ``tiny``)."""
 
     model_name: ClassVar[str] = "dummy"

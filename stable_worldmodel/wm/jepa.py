@@ -92,6 +92,10 @@ class JEPA(nn.Module):
             return p.dtype
         return torch.float32
 
+    def subgoal_keys(self) -> tuple[str | None, str]:
+        """Info keys of the context and goal embeddings a subgoal waypoint replaces (:mod:`stable_worldmodel.wm.base`)."""
+        return EMB, GOAL_EMB
+
     # -- verbs --------------------------------------------------------------------------------
     def encode_pixels(self, pixels: torch.Tensor) -> torch.Tensor:
         """``(..., C, h, w)`` float images -> ``(..., D)`` embeddings."""

@@ -60,11 +60,11 @@ def test_epochs_bound_the_run(swm, toy):
 
 
 def test_set_overrides_config_fields(swm, toy, _stablewm_home):
-    result = swm("train", "dummy", "--dataset", toy, "--steps", "2", "--name", "r", *QUICK, "--set", "embed_dim=12",
+    result = swm("train", "dummy", "--dataset", toy, "--steps", "2", "--name", "r", *QUICK, "--set", "warmup_steps=12",
                  "--set", "image_mean=[0.4, 0.4, 0.4]")
     assert result.exit_code == 0, result.output
     config = json.loads((_stablewm_home / "checkpoints" / "r" / "protocol.json").read_text())["config"]
-    assert config["embed_dim"] == 12 and list(config["image_mean"]) == [0.4, 0.4, 0.4]
+    assert config["warmup_steps"] == 12 and list(config["image_mean"]) == [0.4, 0.4, 0.4]
 
 
 def test_unknown_model_is_one_line_naming_the_close_one(swm, toy, error_line, _stablewm_home):
@@ -94,7 +94,7 @@ def test_unknown_dataset_is_one_line_naming_the_cached_ones(swm, toy, error_line
         (("--lr", "-1"), 2, "'--lr': requires a number > 0, got '-1'"),
         (("--frameskip", "x"), 2, "'--frameskip'"),
         (("--set", "lr"), 2, "A config override requires KEY=VALUE (a config field of the model, e.g. proprio_dim=2), got 'lr'"),
-        (("--set", "embed_dimm=8"), 1, "DummyConfig has no field 'embed_dimm'. Did you mean one of 'embed_dim'"),
+        (("--set", "warmup_stepz=8"), 1, "DummyConfig has no field 'warmup_stepz'. Did you mean 'warmup_steps'"),
     ],
     ids=lambda v: " ".join(v) if isinstance(v, tuple) else None,
 )

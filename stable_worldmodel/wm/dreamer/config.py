@@ -6,7 +6,8 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from ...errors import ConfigError
-from ..config import IMAGENET_MEAN, IMAGENET_STD, JEPAConfig
+from ..base import check_positive_int
+from ..config import IMAGENET_MEAN, IMAGENET_STD, ImageEncoderConfig
 
 __all__ = ["DreamerConfig"]
 
@@ -14,8 +15,8 @@ _P = "stable_worldmodel.wm"
 
 
 @dataclass
-class DreamerConfig(JEPAConfig):
-    """:class:`~stable_worldmodel.wm.config.JEPAConfig` for a Dreamer-style RSSM.
+class DreamerConfig(ImageEncoderConfig):
+    """:class:`~stable_worldmodel.wm.config.ImageEncoderConfig` for a Dreamer-style RSSM.
 
     Model: the inherited image ``encoder`` (``embed_dim`` wide for the CNN), a GRU deterministic
     state of ``deter_dim``, a diagonal Gaussian stochastic state of ``stoch_dim`` (prior and
@@ -29,8 +30,7 @@ class DreamerConfig(JEPAConfig):
     the embedding head's MSE (to detached embeddings); with ``reward_head``
     a reward MLP is trained with MSE (``reward_coef``) and the dataset must have a ``reward``
     column (``needs_reward``). Every sample has ``history_size + num_preds`` frames, all filtered
-    by the posterior. The inherited predictor sizes (``depth``, ``heads``, ``dim_head``,
-    ``mlp_dim``, ``dropout``, ``projector_hidden``) are not used.
+    by the posterior.
 
     Presets: ``tiny`` (64x64, ConvEncoder of width 8, deter 64, stoch 16, 5 frames per sample,
     2000 steps: about 4 minutes on a 2-core CPU; on TwoRoom its latent starts encoding the agent
@@ -42,6 +42,8 @@ class DreamerConfig(JEPAConfig):
     target: ClassVar[str] = "stable_worldmodel.wm.dreamer.Dreamer"
     #: read by :class:`~stable_worldmodel.train.data.TrainData`; set per instance from ``reward_head``
     needs_reward: ClassVar[bool] = False
+    #: planning may aim at waypoints (the embedding head predicts a frame's embedding)
+    subgoal_graph: ClassVar[bool] = True
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "tiny": {
             "image_size": 64, "cnn_width": 8, "embed_dim": 64, "deter_dim": 64, "stoch_dim": 16, "hidden": 64,
@@ -75,9 +77,7 @@ class DreamerConfig(JEPAConfig):
         super().__post_init__()
         name = type(self).__name__
         for key in ("deter_dim", "stoch_dim", "hidden"):
-            value = getattr(self, key)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ConfigError(f"{name} requires {key} to be a positive int, got {value!r}")
+            check_positive_int(name, key, getattr(self, key))
         for key in ("kl_dyn", "kl_rep", "free_bits", "recon_coef", "reward_coef", "embed_coef"):
             value = getattr(self, key)
             if isinstance(value, bool) or not isinstance(value, (int, float)) or value < 0:

@@ -68,6 +68,11 @@ class Dreamer(nn.Module):
     def _dtype(self) -> torch.dtype:
         return next(self.rssm.parameters()).dtype
 
+    def subgoal_keys(self) -> tuple[str | None, str]:
+        """Info keys of the context (None: it filters its context itself, with the actions between
+        frames) and goal embeddings a subgoal waypoint replaces."""
+        return None, GOAL_EMB
+
     # -- verbs --------------------------------------------------------------------------------
     def encode_pixels(self, pixels: torch.Tensor) -> torch.Tensor:
         """``(..., C, h, w)`` float images -> frame embeddings ``(..., E)`` (the posterior's input)."""

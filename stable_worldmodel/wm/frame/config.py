@@ -7,13 +7,13 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from ...errors import ConfigError
-from ..config import JEPAConfig
+from ..base import WorldModelConfig
 
 __all__ = ["FrameConfig"]
 
 
 @dataclass
-class FrameConfig(JEPAConfig):
+class FrameConfig(WorldModelConfig):
     """``source`` (the run whose frozen encoder's latents are decoded; required) and ``width``
     (channels of the decoder's last upsampling stage; earlier stages double it, up to 8x).
 
@@ -33,6 +33,8 @@ class FrameConfig(JEPAConfig):
 
     source: str = ""
     width: int = 16
+    #: the source run's embedding width (set from its protocol, not by the user)
+    embed_dim: int = 0
     history_size: int = 1
     num_preds: int = 1
     frameskip: int = 1

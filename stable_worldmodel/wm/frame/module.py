@@ -13,6 +13,7 @@ from torch import nn
 
 from ... import keys
 from ...errors import ConfigError
+from ..base import DecodesFrames
 
 __all__ = ["FrameDecoder", "FrameModel", "PredictionPanel"]
 
@@ -110,7 +111,7 @@ class PredictionPanel:
     """
 
     def __init__(self, world_model: Any, frame_model: FrameModel | None, image_mean, image_std):
-        if frame_model is None and not getattr(world_model, "decodes_frames", False):
+        if frame_model is None and not (isinstance(world_model, DecodesFrames) and world_model.decodes_frames):
             raise ConfigError(f"PredictionPanel requires a frame model, or a world model with its own decode; "
                               f"{type(world_model).__name__} has none")
         self.world_model, self.frame_model = world_model, frame_model

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from ...errors import ConfigError, did_you_mean, unknown_name
-from ..config import IMAGENET_MEAN, IMAGENET_STD, JEPAConfig
+from ..config import IMAGENET_MEAN, IMAGENET_STD, ImageEncoderConfig, PredictorConfig
 
 __all__ = ["GOAL_SAMPLING", "GCBCConfig", "GCIQLConfig", "GCIVLConfig", "GCRLConfig", "check_goal_probabilities"]
 
@@ -75,8 +75,9 @@ def _presets(paper_lr: float, paper_dropout: float, **common: Any) -> dict[str, 
 
 
 @dataclass
-class GCRLConfig(JEPAConfig):
-    """:class:`~stable_worldmodel.wm.config.JEPAConfig` (encoder, sizes, data protocol, recipe)
+class GCRLConfig(ImageEncoderConfig, PredictorConfig):
+    """An image encoder (:class:`~stable_worldmodel.wm.config.ImageEncoderConfig`) and transformer heads
+    (:class:`~stable_worldmodel.wm.config.PredictorConfig`) over the data protocol and recipe
     for a :class:`~stable_worldmodel.wm.gcrl.GCRL` policy whose ``algorithm`` the subclass fixes.
 
     The heads are transformers of ``depth`` layers over the ``history_size`` frames' tokens
@@ -87,7 +88,7 @@ class GCRLConfig(JEPAConfig):
     ``expectile``, ``awr_alpha``, ``value_ema`` (EMA coefficient of the target heads),
     ``actor_encoder_grad`` (the actor term trains the encoder too: True, as our encoders start
     from scratch; upstream froze it, see :mod:`stable_worldmodel.wm.gcrl.algorithms`). Goals:
-    see the module docstring. ``projector_hidden`` and ``num_preds`` are not used.
+    see the module docstring. ``num_preds`` is not used.
     """
 
     target: ClassVar[str] = f"{_P}.GCRL"

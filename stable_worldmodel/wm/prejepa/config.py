@@ -7,7 +7,9 @@ from typing import Any, ClassVar
 
 from ...errors import ConfigError
 from ..backbones import BACKBONES, LOCAL_FAMILIES, backbone_spec
-from ..config import IMAGENET_MEAN, IMAGENET_STD, JEPAConfig
+from ... import keys
+from ..base import check_positive_int
+from ..config import IMAGENET_MEAN, IMAGENET_STD, PredictorConfig
 
 __all__ = ["PreJEPAConfig"]
 
@@ -16,8 +18,8 @@ _EMBEDDER = f"{_P}.prejepa.module.Embedder"
 
 
 @dataclass
-class PreJEPAConfig(JEPAConfig):
-    """:class:`~stable_worldmodel.wm.config.JEPAConfig` for DINO-WM.
+class PreJEPAConfig(PredictorConfig):
+    """:class:`~stable_worldmodel.wm.config.PredictorConfig` for DINO-WM.
 
     Encoder (frozen): ``backbone`` (a name of :func:`~stable_worldmodel.wm.backbones.list_backbones`),
     ``pretrained`` (load its weights from ``backbone_path`` or ``$STABLEWM_HOME/backbones/``;
@@ -31,8 +33,7 @@ class PreJEPAConfig(JEPAConfig):
     Extra inputs: ``action_emb_dim`` (width of the action embedding), ``proprio_dim``
     (numbers of the dataset's ``proprio`` column; 0: pixels only) and ``proprio_emb_dim``.
     Predictor: ``depth``, ``heads``, ``dim_head``, ``mlp_dim``, ``dropout`` over
-    ``history_size`` frames. The inherited ``encoder``, ``vit_size``, ``vit_overrides``,
-    ``patch_size`` and ``projector_hidden`` are not used.
+    ``history_size`` frames.
 
     Presets: ``tiny`` (64x64, the randomly initialised anti-aliased CNN ``cnn_aa`` with 2 x 2
     tokens of 64 values, one context frame, a 2-layer predictor: a CPU trains it in under a
@@ -64,7 +65,12 @@ class PreJEPAConfig(JEPAConfig):
         },
     }
 
+    #: planning may aim at waypoints (without proprio: see :meth:`subgoal_graph_unavailable`)
+    subgoal_graph: ClassVar[bool] = True
+
     backbone: str = "cnn"
+    embed_dim: int = 64
+    cnn_width: int = 8
     backbone_path: str | None = None
     pretrained: bool = False
     backbone_overrides: dict[str, Any] = field(default_factory=dict)
@@ -76,20 +82,16 @@ class PreJEPAConfig(JEPAConfig):
     proprio_emb_dim: int = 10
     interpolate_pos_encoding: bool = True
     history_size: int = 3
-    projector_hidden: int = 0
 
     def __post_init__(self) -> None:
         super().__post_init__()
         name = type(self).__name__
         backbone_spec(self.backbone)  # an unknown name gets the "did you mean" error
-        for key in ("cnn_grid", "blur_pool", "action_emb_dim", "proprio_emb_dim"):
-            value = getattr(self, key)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ConfigError(f"{name} requires {key} to be a positive int, got {value!r}")
+        for key in ("embed_dim", "cnn_width", "cnn_grid", "blur_pool", "action_emb_dim", "proprio_emb_dim"):
+            check_positive_int(name, key, getattr(self, key))
         if isinstance(self.blur_sigma, bool) or not isinstance(self.blur_sigma, (int, float)) or self.blur_sigma < 0:
             raise ConfigError(f"{name} requires blur_sigma >= 0 (pixels; 0: image_size / 8), got {self.blur_sigma!r}")
-        if isinstance(self.proprio_dim, bool) or not isinstance(self.proprio_dim, int) or self.proprio_dim < 0:
-            raise ConfigError(f"{name} requires proprio_dim to be an int >= 0 (0: no proprio input), got {self.proprio_dim!r}")
+        check_positive_int(name, "proprio_dim", self.proprio_dim, minimum=0)
         if not isinstance(self.pretrained, bool):
             raise ConfigError(f"{name} requires pretrained to be a bool, got {self.pretrained!r}")
         local = backbone_spec(self.backbone).family in LOCAL_FAMILIES
@@ -100,6 +102,17 @@ class PreJEPAConfig(JEPAConfig):
                               f"image_size={self.image_size}, blur_pool={self.blur_pool}, cnn_grid={self.cnn_grid}")
         if not local and self.image_size < self.backbone_patch:
             raise ConfigError(f"{name} requires image_size >= the backbone's patch size {self.backbone_patch}, got {self.image_size}")
+
+    @property
+    def extra_columns(self) -> dict[str, int]:
+        """``proprio`` (its width) when ``proprio_dim > 0``."""
+        return {keys.PROPRIO: self.proprio_dim} if self.proprio_dim else {}
+
+    @classmethod
+    def subgoal_graph_unavailable(cls, config: Any) -> str | None:
+        if (config or {}).get("proprio_dim"):
+            return "a PreJEPA with proprio scores more than its patch features"
+        return None
 
     # -- sizes --------------------------------------------------------------------------------
     @property

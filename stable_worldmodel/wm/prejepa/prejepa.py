@@ -105,6 +105,13 @@ class PreJEPA(nn.Module):
             start += dim
         return out
 
+    def subgoal_keys(self) -> tuple[str | None, str]:
+        """Info keys of the context and goal embeddings a subgoal waypoint replaces: its patch
+        features, when it plans on them alone (no proprio: the state part has no waypoint)."""
+        if self.state_keys:
+            raise ConfigError(f"subgoals='graph' requires a PreJEPA without proprio, got one reading {self.state_keys}")
+        return PIXELS_EMB, f"pixels_{GOAL_EMB}"
+
     # -- verbs --------------------------------------------------------------------------------
     def encode_pixels(self, pixels: torch.Tensor) -> torch.Tensor:
         """``(..., C, h, w)`` float images -> frozen features ``(..., P, Dv)``."""

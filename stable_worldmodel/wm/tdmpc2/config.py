@@ -7,7 +7,7 @@ from typing import Any, ClassVar
 
 from ... import keys
 from ...errors import ConfigError, did_you_mean
-from ..config import JEPAConfig
+from ..base import WorldModelConfig, check_positive_int
 
 __all__ = ["TDMPC2Config"]
 
@@ -15,8 +15,8 @@ _PIXEL_ENCODERS = ("conv", "tdmpc2")
 
 
 @dataclass
-class TDMPC2Config(JEPAConfig):
-    """:class:`~stable_worldmodel.wm.config.JEPAConfig` for TD-MPC2, which learns from a ``reward``
+class TDMPC2Config(WorldModelConfig):
+    """:class:`~stable_worldmodel.wm.base.WorldModelConfig` for TD-MPC2, which learns from a ``reward``
     column (``needs_reward``: training on a dataset without one is refused, saying how to record it).
 
     Model: ``pixel_encoder`` (``"conv"``: our :class:`~stable_worldmodel.wm.encoders.ConvEncoder` of
@@ -38,9 +38,8 @@ class TDMPC2Config(JEPAConfig):
     by ``get_action``). Data: one frame of context (``history_size`` must be 1) and ``num_preds``
     transitions per sample (upstream's ``horizon``); ``reward[:, t]`` is the sum of the
     ``frameskip`` env rewards earned by the action block ``t`` (see :mod:`stable_worldmodel.train.data`).
-    The inherited ``encoder`` must be ``"cnn"``; ``vit_*``, ``patch_size``, ``depth``, ``heads``,
-    ``dim_head``, ``dropout`` and ``projector_hidden`` are not used, nor is ``encoder_lr_scale``
-    (the encoder's parameters are named ``cnn`` / ``pixel_encoder``, as upstream's).
+    ``encoder_lr_scale`` is not used (the encoder's parameters are named ``cnn`` / ``pixel_encoder``,
+    as upstream's).
 
     Presets: ``tiny`` (64x64, ConvEncoder of width 16, latent 64, MLPs of 128, batch 32, 3000 steps
     of ~0.12 s on 2 CPU cores, so about 6 minutes, discount 0.9: with TwoRoom's episodes of ~20
@@ -73,6 +72,7 @@ class TDMPC2Config(JEPAConfig):
     }
 
     pixel_encoder: str = "conv"
+    cnn_width: int = 8
     num_channels: int = 32
     embed_dim: int = 64
     mlp_dim: int = 128
@@ -105,18 +105,13 @@ class TDMPC2Config(JEPAConfig):
         if self.pixel_encoder not in _PIXEL_ENCODERS:
             raise ConfigError(f"{name} requires pixel_encoder in {_PIXEL_ENCODERS}, got {self.pixel_encoder!r}."
                               f"{did_you_mean(str(self.pixel_encoder), _PIXEL_ENCODERS)}")
-        if self.encoder != "cnn":
-            raise ConfigError(f"{name} requires encoder 'cnn' (choose the CNN with pixel_encoder), got {self.encoder!r}")
         if self.history_size != 1:
             raise ConfigError(f"{name} requires history_size 1 (TD-MPC2 encodes one frame), got {self.history_size}")
-        for key in ("num_channels", "enc_dim", "num_q", "num_bins", "simnorm_dim", "proprio_emb_dim", "num_pi_trajs"):
-            value = getattr(self, key)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ConfigError(f"{name} requires {key} to be a positive int, got {value!r}")
+        for key in ("cnn_width", "embed_dim", "mlp_dim", "num_channels", "enc_dim", "num_q", "num_bins", "simnorm_dim",
+                    "proprio_emb_dim", "num_pi_trajs"):
+            check_positive_int(name, key, getattr(self, key))
         for key in ("proprio_dim", "goal_proprio_dim"):
-            value = getattr(self, key)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-                raise ConfigError(f"{name} requires {key} to be an int >= 0 (0: no {key[:-4]} input), got {value!r}")
+            check_positive_int(name, key, getattr(self, key), minimum=0)
         if self.num_q < 2 or self.num_bins < 2 or not self.vmin < self.vmax:
             raise ConfigError(f"{name} requires num_q >= 2, num_bins >= 2 and vmin < vmax, "
                               f"got {self.num_q}, {self.num_bins}, {self.vmin}, {self.vmax}")
