@@ -201,9 +201,12 @@ def _wait(ray: Any, refs: list, progress: bool, label: str) -> list:
 
 # -- evaluation ----------------------------------------------------------------------------------
 def _evaluate_chunk(env_id: str, policy: str, seeds: Sequence[int], image_size: int, max_steps: int | None,
-                    factors: Sequence[str], plan: Any, device: str) -> dict[str, list]:
-    """One Ray task: evaluate ``policy`` on consecutive ``seeds`` with one env."""
+                    factors: Sequence[str], plan: Any, device: str, cache_dir: str) -> dict[str, list]:
+    """One Ray task: evaluate ``policy`` on consecutive ``seeds`` with one env, reading checkpoints
+    from the driver's cache folder (a worker of an existing cluster does not inherit its environment)."""
     from ..cli.worlds import evaluate_policy, make_world
+
+    os.environ["STABLEWM_HOME"] = cache_dir
 
     with make_world(env_id, 1, image_size, max_steps, verbose=0) as world:
         out = evaluate_policy(world, policy, len(seeds), int(seeds[0]), factors, plan=plan, device=device)
@@ -220,11 +223,14 @@ def evaluate_on_ray(
     Returns ``episode_successes`` / ``episode_lengths`` in seed order (as ``World.evaluate``) and
     ``success_rate``.
     """
-    ray = init_ray(address, num_cpus=num_cpus, cache_dir=cache_dir)
+    from ..data.utils import get_cache_dir
+
+    cache = str(Path(cache_dir if cache_dir is not None else get_cache_dir()).resolve())
+    ray = init_ray(address, num_cpus=num_cpus, cache_dir=cache)
     count = chunks or max(1, int(ray.cluster_resources().get("CPU", 1)))
     parts = [c for c in np.array_split(np.arange(seed, seed + episodes), min(count, episodes)) if len(c)]
     task = ray.remote(num_cpus=1)(_evaluate_chunk)
-    refs = [task.remote(env_id, policy, c.tolist(), image_size, max_steps, list(factors), plan, device) for c in parts]
+    refs = [task.remote(env_id, policy, c.tolist(), image_size, max_steps, list(factors), plan, device, cache) for c in parts]
     results = _wait(ray, refs, progress, f"Evaluating {policy} on Ray")
     out = {k: [v for r in results for v in r.get(k, [])] for k in ("episode_successes", "episode_lengths")}
     out["success_rate"] = 100.0 * float(np.mean(out["episode_successes"])) if out["episode_successes"] else 0.0

@@ -174,3 +174,18 @@ def test_swm_sweep_file_on_ray_equals_the_single_process_sweep(local_ray, swm, t
     (tmp_path / "bad2.yaml").write_text("envs: [swm/Toy-v0]\npolicies: [expert]\nfactors: [agnt]\n")
     bad = swm("sweep", str(tmp_path / "bad2.yaml"))
     assert bad.exit_code != 0 and "Did you mean" in error_line(bad) and "'agent'" in error_line(bad)
+
+
+def test_an_evaluation_task_reads_checkpoints_from_the_drivers_cache(tmp_path, monkeypatch):
+    """A worker of an existing cluster does not inherit the driver's STABLEWM_HOME: the task is given it."""
+    import os
+
+    from stable_worldmodel.cli import worlds
+    from stable_worldmodel.world.on_ray import _evaluate_chunk
+
+    seen = []
+    monkeypatch.setenv("STABLEWM_HOME", str(tmp_path / "worker_default"))
+    monkeypatch.setattr(worlds, "evaluate_policy", lambda world, policy, *a, **k: seen.append(os.environ["STABLEWM_HOME"]) or
+                        {"episode_successes": [True], "episode_lengths": [3]})
+    out = _evaluate_chunk("swm/Toy-v0", "random", [0], 16, 5, [], None, "cpu", str(tmp_path / "driver"))
+    assert seen == [str(tmp_path / "driver")] and out == {"episode_successes": [True], "episode_lengths": [3]}
