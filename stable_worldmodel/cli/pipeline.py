@@ -7,6 +7,7 @@ from typing import Annotated, Any
 
 import typer
 
+from ..solver import list_solvers
 from .errors import int_in, output_dir, output_file, require
 
 EnvArg = Annotated[str, typer.Argument(help="Environment id, e.g. swm/TwoRoom-v2 (see `swm envs`).", metavar="ENV", show_default=False)]
@@ -127,7 +128,7 @@ def eval_cmd(
     num_envs: NumEnvsOpt = 1,
     max_steps: MaxStepsOpt = None,
     image_size: EvalImageSizeOpt = None,
-    solver: Annotated[str, typer.Option("--solver", metavar="NAME", help="Planner of wm: policies: cem, icem, mppi, gd or random.")] = "cem",
+    solver: Annotated[str, typer.Option("--solver", metavar="NAME", help=f"Planner of wm: policies: {', '.join(list_solvers())} (swm list solver).")] = "cem",
     horizon: Annotated[int, typer.Option("--horizon", parser=int_in(1), metavar="H", help="Planned action blocks (wm: policies).")] = 5,
     receding_horizon: Annotated[int, typer.Option("--receding-horizon", parser=int_in(1), metavar="R", help="Blocks executed before replanning (MPC; at most H).")] = 1,
     samples: Annotated[int, typer.Option("--samples", parser=int_in(1), metavar="S", help="Candidates per solver iteration.")] = 300,

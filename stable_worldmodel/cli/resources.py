@@ -20,7 +20,7 @@ from ..errors import ConfigError, unknown_name
 from .errors import check_choice
 
 #: plural spellings accepted for every kind
-ALIASES = {"models": "model", "datasets": "dataset", "worlds": "world"}
+ALIASES = {"models": "model", "datasets": "dataset", "worlds": "world", "solvers": "solver"}
 
 
 #: ``protocol.json`` entries shown by ``swm show model``: (label, key)
@@ -208,15 +208,33 @@ def _check_names(kind: str, names: Sequence[str], known: Sequence[str]) -> None:
             raise unknown_name(kind, name, known)
 
 
-def list_cmd(kind: Annotated[str, typer.Argument(help="What to list: model, dataset or world.", metavar="KIND", show_default=False)]) -> None:
-    """List cached models or datasets, or the registered worlds.
+def _list_solvers() -> None:
+    from rich.table import Table
+
+    from ..solver import get_solver_class, list_solvers
+    from .display import console
+
+    table = Table(title="Solvers (swm eval --solver NAME)")
+    for column in ("name", "class", "what it does"):
+        table.add_column(column)
+    for name in list_solvers():
+        cls = get_solver_class(name)
+        table.add_row(name, cls.__name__, cls.knobs.summary)
+    console().print(table)
+
+
+def list_cmd(kind: Annotated[str, typer.Argument(help="What to list: model, dataset, world or solver.", metavar="KIND", show_default=False)]) -> None:
+    """List cached models or datasets, the registered worlds, or the planning solvers.
 
     Example: swm list dataset
     """
     from ..data import get_cache_dir
     from .display import names_table
 
-    kind = check_choice("kind", kind, ("model", "dataset", "world"), ALIASES)
+    kind = check_choice("kind", kind, ("model", "dataset", "world", "solver"), ALIASES)
+    if kind == "solver":
+        _list_solvers()
+        return
     note = None if kind == "world" else str(get_cache_dir())
     title = {"model": "Cached models", "dataset": "Cached datasets", "world": "Worlds"}[kind]
     names_table(title, sorted(_lister(kind)()), note)

@@ -21,7 +21,6 @@ logger = logging.getLogger(__name__)
 
 __all__ = ["PlanSettings", "world_model_policy"]
 
-SOLVERS = ("cem", "icem", "mppi", "gd", "random")
 SUBGOALS = ("auto", "graph", "none")
 PLAN_COSTS = ("auto", *GOAL_COSTS)
 #: the least ``patience`` (env steps) of ``subgoals="auto"``: a plan needs a few steps to show progress
@@ -63,10 +62,12 @@ class PlanSettings:
     extra: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        if self.solver not in SOLVERS:
+        from ..solver import list_solvers
+
+        if self.solver not in list_solvers():
             from ..errors import unknown_name
 
-            raise unknown_name("planning solver", self.solver, SOLVERS)
+            raise unknown_name("planning solver", self.solver, list_solvers())
         if self.cost not in PLAN_COSTS:
             from ..errors import unknown_name
 
@@ -106,15 +107,13 @@ class PlanSettings:
 
 
 def _make_solver(model: Any, settings: PlanSettings, device: Any) -> Any:
-    from ..solver import make_solver
+    """The solver of ``settings``: its class's :class:`~stable_worldmodel.solver.base.PlanKnobs` say
+    which constructor arguments the plan's samples, iterations and elites go to."""
+    from ..solver import get_solver_class
 
-    name, common = settings.solver, {"device": device, "seed": settings.seed}
-    if name == "gd":
-        return make_solver("gd", model, n_steps=settings.iterations, num_samples=1, **common)
-    if name == "random":
-        return make_solver("random", model, num_samples=settings.samples, **common)
-    topk = settings.topk or max(1, settings.samples // 10)
-    return make_solver(name, model, num_samples=settings.samples, n_steps=settings.iterations, topk=topk, **common)
+    cls = get_solver_class(settings.solver)
+    kwargs = cls.knobs.kwargs(settings.samples, settings.iterations, settings.topk)
+    return cls(model, device=device, seed=settings.seed, **kwargs)
 
 
 def world_model_policy(

@@ -10,21 +10,17 @@ from typing import TYPE_CHECKING
 
 from .._lazy import lazy_getattr
 
-from ._registry import get_solver_class, list_solvers, make_solver, register_solver
+from ._registry import BUILTIN, get_solver_class, list_solvers, make_solver, register_solver
 
 _ATTRS = {
     "Solver": "solver",
     "BaseSolver": "base",
+    "PlanKnobs": "base",
     "Costable": "solver",
     "AUTO_BATCH": "base",
-    "CEMSolver": "cem",
-    "ICEMSolver": "icem",
-    "MPPISolver": "mppi",
-    "GradientSolver": "gd",
-    "GDSolver": "gd",
-    "PGDSolver": "discrete_solvers",
-    "RandomSolver": "random",
-    "NevergradSolver": "nevergrad",
+    "GDSolver": "gd",  # the seed's alias of GradientSolver
+    # every built-in solver class, from the registry's table (one line there adds a solver)
+    **{entry.partition(":")[2]: entry.partition(":")[0].rpartition(".")[2] for entry in BUILTIN.values()},
 }
 
 __all__ = ["get_solver_class", "list_solvers", "make_solver", "register_solver", *_ATTRS]

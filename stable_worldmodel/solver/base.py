@@ -11,7 +11,8 @@ import logging
 import math
 import numbers
 from collections.abc import Iterator
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
@@ -22,7 +23,36 @@ from ._heap import raise_trim_threshold
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["AUTO_BATCH", "BaseSolver"]
+__all__ = ["AUTO_BATCH", "BaseSolver", "PlanKnobs"]
+
+
+@dataclass(frozen=True)
+class PlanKnobs:
+    """How the knobs of a plan (``PlanSettings`` / ``swm eval``: samples, iterations, elites) reach
+    a solver's constructor, declared once on the solver class (``knobs = PlanKnobs(...)``).
+
+    Each of ``samples``, ``iterations`` and ``elites`` names the constructor argument it goes to,
+    or is None when the solver has no such knob; ``fixed`` are constructor arguments it always
+    gets; ``summary`` is its one-line description in the CLI's help.
+    """
+
+    samples: str | None = "num_samples"
+    iterations: str | None = "n_steps"
+    elites: str | None = None
+    fixed: tuple[tuple[str, Any], ...] = ()
+    summary: str = ""
+
+    def kwargs(self, samples: int, iterations: int, elites: int | None) -> dict[str, Any]:
+        """Constructor arguments for a plan of ``samples`` candidates, ``iterations`` and ``elites``
+        (None: a tenth of the samples, at least 1)."""
+        out: dict[str, Any] = dict(self.fixed)
+        if self.samples:
+            out[self.samples] = samples
+        if self.iterations:
+            out[self.iterations] = iterations
+        if self.elites:
+            out[self.elites] = elites if elites is not None else max(1, samples // 10)
+        return out
 
 
 class _AutoBatch(int):
@@ -76,6 +106,8 @@ class BaseSolver:
     _inference_mode: bool = False
     #: ``topk`` is the number of elites and cannot be None (CEM, iCEM, MPPI)
     _uses_topk: bool = False
+    #: how a plan's samples / iterations / elites reach the constructor (``swm eval --solver``)
+    knobs: ClassVar[PlanKnobs] = PlanKnobs()
 
     def __init__(
         self,

@@ -8,7 +8,7 @@ import torch
 
 from ._registry import register_solver
 from ._start import GaussianStart
-from .base import AUTO_BATCH, BaseSolver
+from .base import AUTO_BATCH, BaseSolver, PlanKnobs
 
 
 @register_solver("cem")
@@ -42,6 +42,7 @@ class CEMSolver(GaussianStart, BaseSolver):
 
     _inference_mode = True
     _uses_topk = True
+    knobs = PlanKnobs(elites="topk", summary="cross-entropy method: Gaussian refitted to the best samples")
 
     def __init__(
         self,

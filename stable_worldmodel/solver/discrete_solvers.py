@@ -12,6 +12,7 @@ from gymnasium.vector.utils import batch_space
 
 from ..errors import ConfigError, SpaceError
 from ._registry import register_solver
+from .base import PlanKnobs
 from .gd import GradientSolver
 
 
@@ -45,6 +46,8 @@ class PGDSolver(GradientSolver):
     point, as do all plans without warm start; ``var_scale`` noise is added to every sample
     but the warm start itself.
     """
+
+    knobs = PlanKnobs(samples=None, fixed=(("num_samples", 1),), summary="projected gradient descent (discrete actions)")
 
     def configure(self, *, action_space: gym.Space, n_envs: int, config: Any) -> None:
         """Like :meth:`BaseSolver.configure`; a single ``Discrete(n)`` is batched to ``n_envs`` envs."""

@@ -10,7 +10,7 @@ import torch
 
 from ..errors import ConfigError
 from ._registry import register_solver
-from .base import BaseSolver
+from .base import BaseSolver, PlanKnobs
 
 
 @register_solver("gd")
@@ -29,6 +29,7 @@ class GradientSolver(BaseSolver):
 
     #: starting plans ``(B, S, H, A)`` drawn by the last :meth:`init_action` call (None before)
     init: torch.Tensor | None = None
+    knobs = PlanKnobs(samples=None, fixed=(("num_samples", 1),), summary="gradient descent through the model")
 
     def __init__(
         self,

@@ -8,7 +8,7 @@ import torch
 
 from ._registry import register_solver
 from ._start import GaussianStart
-from .base import AUTO_BATCH, BaseSolver
+from .base import AUTO_BATCH, BaseSolver, PlanKnobs
 
 
 def colored_noise(white: torch.Tensor, beta: float) -> torch.Tensor:
@@ -52,6 +52,7 @@ class ICEMSolver(GaussianStart, BaseSolver):
 
     _inference_mode = True
     _uses_topk = True
+    knobs = PlanKnobs(elites="topk", summary="improved CEM: coloured noise, elites kept, momentum")
 
     def __init__(
         self,

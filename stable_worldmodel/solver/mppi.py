@@ -8,7 +8,7 @@ import torch
 
 from ._registry import register_solver
 from ._start import GaussianStart
-from .base import AUTO_BATCH, BaseSolver
+from .base import AUTO_BATCH, BaseSolver, PlanKnobs
 
 
 @register_solver("mppi")
@@ -27,6 +27,7 @@ class MPPISolver(GaussianStart, BaseSolver):
 
     _inference_mode = True
     _uses_topk = True
+    knobs = PlanKnobs(elites="topk", summary="model-predictive path integral: cost-weighted average")
 
     def __init__(
         self,

@@ -13,7 +13,7 @@ import torch
 from .._optional import require
 from ..errors import ConfigError
 from ._registry import register_solver
-from .base import AUTO_BATCH, BaseSolver
+from .base import AUTO_BATCH, BaseSolver, PlanKnobs
 
 
 @register_solver("nevergrad")
@@ -30,6 +30,8 @@ class NevergradSolver(BaseSolver):
     per env, ``actions: (B, H, A)``, and its ``costs: (B,)``.
     Nevergrad runs on the CPU, so each round copies the costs to the host.
     """
+
+    knobs = PlanKnobs(summary="a nevergrad optimizer per env (CMA; needs the nevergrad extra)")
 
     def __init__(
         self,

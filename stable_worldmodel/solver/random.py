@@ -7,7 +7,7 @@ from typing import Any
 import torch
 
 from ._registry import register_solver
-from .base import AUTO_BATCH, BaseSolver
+from .base import AUTO_BATCH, BaseSolver, PlanKnobs
 
 
 @register_solver("random")
@@ -21,6 +21,7 @@ class RandomSolver(BaseSolver):
     """
 
     _inference_mode = True
+    knobs = PlanKnobs(iterations=None, summary="random shooting: the best of uniform samples")
 
     def __init__(
         self,

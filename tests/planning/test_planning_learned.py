@@ -13,7 +13,11 @@ import torch
 
 from stable_worldmodel import World, keys
 from stable_worldmodel.errors import ConfigError, UnknownNameError
-from stable_worldmodel.planning.learned import SOLVERS, PlanSettings, world_model_policy
+from stable_worldmodel.planning.learned import PlanSettings, world_model_policy
+from stable_worldmodel.solver import list_solvers
+
+#: every registered solver that plans continuous actions (pgd relaxes discrete ones)
+SOLVERS = [name for name in list_solvers() if name != "pgd"]
 from stable_worldmodel.policy import RandomPolicy
 from stable_worldmodel.wm.preprocess import Normalizer
 
@@ -187,7 +191,7 @@ def test_plan_settings_unknown_solver_suggests_the_close_names():
     message = str(info.value)
     assert isinstance(info.value, KeyError) and "'cme'" in message
     assert "Did you mean" in message and message.index("'cem'") < message.index("'icem'")
-    assert "Accepted: cem, gd, icem, mppi, random" in message
+    assert "Accepted: cem, gd, icem, mppi, nevergrad, pgd, random" in message
 
 
 @pytest.mark.parametrize(
