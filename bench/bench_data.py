@@ -1,6 +1,6 @@
 """Dataset benchmark: record_dataset rows/s and bytes/row, HDF5Dataset samples/s (num_steps=4).
 
-    python bench/bench_data.py [--env swm/PushT-v1] [--episodes 20] [--num-envs 4] [--size 64]
+python bench/bench_data.py [--env swm/PushT-v1] [--episodes 20] [--num-envs 4] [--size 64]
 """
 
 from __future__ import annotations
@@ -31,7 +31,9 @@ def main() -> None:
     from stable_worldmodel.policy import RandomPolicy
 
     tmp = Path(tempfile.mkdtemp())
-    world = World(args.env, num_envs=args.num_envs, image_shape=(args.size, args.size), max_episode_steps=args.steps, verbose=0)
+    world = World(
+        args.env, num_envs=args.num_envs, image_shape=(args.size, args.size), max_episode_steps=args.steps, verbose=0
+    )
     world.set_policy(RandomPolicy(seed=0))
     t0 = time.perf_counter()
     path = world.record_dataset("bench", episodes=args.episodes, seed=0, cache_dir=tmp)
@@ -43,8 +45,12 @@ def main() -> None:
     with h5py.File(path, "r") as f:
         payload = sum(f[k].id.get_storage_size() for k in f)
         raw = sum(f[k].size * f[k].dtype.itemsize for k in f)
-    print(f"record_rows_per_s {rows / elapsed:.0f} rows/s ({rows} rows, {args.env}, {args.num_envs} envs, {args.size}px)")
-    print(f"file_bytes_per_row {os.path.getsize(path) / rows:.0f} (payload {payload / rows:.0f}, uncompressed {raw / rows:.0f})")
+    print(
+        f"record_rows_per_s {rows / elapsed:.0f} rows/s ({rows} rows, {args.env}, {args.num_envs} envs, {args.size}px)"
+    )
+    print(
+        f"file_bytes_per_row {os.path.getsize(path) / rows:.0f} (payload {payload / rows:.0f}, uncompressed {raw / rows:.0f})"
+    )
 
     rng = np.random.default_rng(0)
     idx = rng.integers(0, len(ds), args.samples)
@@ -70,8 +76,10 @@ def main() -> None:
                     if batches == 40:
                         break
             rates.append(n / (time.perf_counter() - t0))
-        print(f"dataloader_w{workers}_samples_per_s {np.median(rates):.0f} (batch 32, 40 batches, median of 3; "
-              f"dataset construction {built * 1e3:.0f} ms not included)")
+        print(
+            f"dataloader_w{workers}_samples_per_s {np.median(rates):.0f} (batch 32, 40 batches, median of 3; "
+            f"dataset construction {built * 1e3:.0f} ms not included)"
+        )
     world.close()
 
 

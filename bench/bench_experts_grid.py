@@ -33,7 +33,7 @@ def single_env_success(env_id: str, episodes: int, options: dict | None) -> tupl
     wins, lengths = 0, []
     for seed in range(episodes):
         obs, info = env.reset(seed=seed, options=options)
-        for t in range(1, MAX_EPISODE_STEPS[env_id] + 1):
+        for t in range(1, MAX_EPISODE_STEPS[env_id] + 1):  # noqa: B007 (t, the episode length, is read after the loop)
             batch = {k: np.asarray(v)[None, None] for k, v in {**obs, **info}.items()}
             obs, _, terminated, truncated, info = env.step(policy.get_action(batch)[0])
             if terminated or truncated:
@@ -82,8 +82,10 @@ def main() -> None:
         print(f"{env_id} (max_episode_steps={MAX_EPISODE_STEPS[env_id]})")
         for label, options in OPTIONS.items():
             rate, length, longest = single_env_success(env_id, args.episodes, options)
-            print(f"  expert, {label:>13}: single env {rate:.0f}% (length mean {length:.1f}, max {longest}); "
-                  f"World 8 envs {world_success(env_id, args.episodes, options)}")
+            print(
+                f"  expert, {label:>13}: single env {rate:.0f}% (length mean {length:.1f}, max {longest}); "
+                f"World 8 envs {world_success(env_id, args.episodes, options)}"
+            )
         print(f"  step + render at 64x64: {steps_per_second(env_id):,.0f} steps/s")
 
 

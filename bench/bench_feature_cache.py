@@ -31,8 +31,16 @@ def main() -> None:
         assert get_cache_dir() == Path(scratch)
         from stable_worldmodel.train import train
 
-        overrides = {"backbone": args.backbone, "pretrained": False, "image_size": args.image_size, "progress": False,
-                     "steps": 1, "val_every": 0, "device": "cpu", "seed": 0}
+        overrides = {
+            "backbone": args.backbone,
+            "pretrained": False,
+            "image_size": args.image_size,
+            "progress": False,
+            "steps": 1,
+            "val_every": 0,
+            "device": "cpu",
+            "seed": 0,
+        }
         runs = []
         for name in ("first", "second"):
             start = time.perf_counter()
@@ -40,7 +48,9 @@ def main() -> None:
             runs.append((result.features, time.perf_counter() - start))
         (first, t1), (second, t2) = runs
         frames = len(first.features)
-        print(f"PreJEPA tiny, backbone {args.backbone} at {args.image_size}px, dataset {args.dataset} ({frames} frames)")
+        print(
+            f"PreJEPA tiny, backbone {args.backbone} at {args.image_size}px, dataset {args.dataset} ({frames} frames)"
+        )
         print(f"first run : features computed in {first.seconds:8.3f} s (whole run {t1:.1f} s)")
         print(f"second run: features loaded   in {second.seconds:8.3f} s (whole run {t2:.1f} s)")
         print(f"encoder time of the second run: {second.seconds / first.seconds:.4f} of the first's")

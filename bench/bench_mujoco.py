@@ -93,8 +93,9 @@ print(json.dumps({"mad": float(np.mean(mads)), "worst": max(mads)}))
 
 
 def picture(env_id: str, quality: str) -> dict | None:
-    out = subprocess.run([sys.executable, "-c", PICTURE, env_id, quality], capture_output=True, text=True,
-                         cwd="/tmp", timeout=1800)
+    out = subprocess.run(
+        [sys.executable, "-c", PICTURE, env_id, quality], capture_output=True, text=True, cwd="/tmp", timeout=1800
+    )
     if out.returncode != 0:
         print(f"    failed: {out.stderr.strip().splitlines()[-1] if out.stderr.strip() else out.returncode}")
         return None
@@ -103,8 +104,14 @@ def picture(env_id: str, quality: str) -> dict | None:
 
 def measure(python: str, env_id: str, n: int, steps: int, quality: str, path: str | None = None) -> dict | None:
     env = {**os.environ, "PYTHONPATH": path} if path else None  # path: another checkout of ours first
-    out = subprocess.run([python, "-c", PROBE, env_id, str(n), str(steps), quality], capture_output=True, text=True,
-                         cwd="/tmp", timeout=1800, env=env)
+    out = subprocess.run(
+        [python, "-c", PROBE, env_id, str(n), str(steps), quality],
+        capture_output=True,
+        text=True,
+        cwd="/tmp",
+        timeout=1800,
+        env=env,
+    )
     if out.returncode != 0:
         print(f"    failed: {out.stderr.strip().splitlines()[-1] if out.stderr.strip() else out.returncode}")
         return None
@@ -116,17 +123,36 @@ def main() -> None:
     parser.add_argument("--envs", nargs="+", default=["swm/OGBCube-v0", "swm/CartpoleDMControl-v0"])
     parser.add_argument("--counts", nargs="+", type=int, default=[1, 4])
     parser.add_argument("--steps", type=int, default=200)
-    parser.add_argument("--quality", nargs="+", default=["medium", "high"], choices=["low", "medium", "high"],
-                        help="our render_quality levels to measure (upstream has one)")
-    parser.add_argument("--repeat", type=int, default=1,
-                        help="rounds; each round runs every configuration once, interleaved, and the median is shown")
-    parser.add_argument("--base", default=None, metavar="DIR",
-                        help="also measure the stable_worldmodel package under DIR (e.g. an extracted older commit: "
-                             "git archive HEAD stable_worldmodel | tar -x -C DIR) with this interpreter, as 'base'")
-    parser.add_argument("--upstream-fixed", action="store_true",
-                        help="also measure upstream with its renderer-freeing bug patched (module docstring)")
-    parser.add_argument("--picture", action="store_true",
-                        help="measure the picture instead: MAD of each --quality below high to high (module docstring)")
+    parser.add_argument(
+        "--quality",
+        nargs="+",
+        default=["medium", "high"],
+        choices=["low", "medium", "high"],
+        help="our render_quality levels to measure (upstream has one)",
+    )
+    parser.add_argument(
+        "--repeat",
+        type=int,
+        default=1,
+        help="rounds; each round runs every configuration once, interleaved, and the median is shown",
+    )
+    parser.add_argument(
+        "--base",
+        default=None,
+        metavar="DIR",
+        help="also measure the stable_worldmodel package under DIR (e.g. an extracted older commit: "
+        "git archive HEAD stable_worldmodel | tar -x -C DIR) with this interpreter, as 'base'",
+    )
+    parser.add_argument(
+        "--upstream-fixed",
+        action="store_true",
+        help="also measure upstream with its renderer-freeing bug patched (module docstring)",
+    )
+    parser.add_argument(
+        "--picture",
+        action="store_true",
+        help="measure the picture instead: MAD of each --quality below high to high (module docstring)",
+    )
     args = parser.parse_args()
     if args.picture:
         print("Picture, 64x64 render(), 12 states (seeds 0-3, after 0/20/45 random actions): MAD to 'high', out of 255")
@@ -134,7 +160,10 @@ def main() -> None:
             for q in (q for q in args.quality if q != "high"):
                 result = picture(env_id, q)
                 if result is not None:
-                    print(f"  {env_id:28s} {q:6s}: MAD {result['mad']:.3f} (worst frame {result['worst']:.3f})", flush=True)
+                    print(
+                        f"  {env_id:28s} {q:6s}: MAD {result['mad']:.3f} (worst frame {result['worst']:.3f})",
+                        flush=True,
+                    )
         return
     peer = str(PEER) if PEER.exists() else None
     print(f"World steps/s, 64x64 pixels, random policy; upstream 0.1.1: {peer or 'not found (ratio not measured)'}")
@@ -151,15 +180,25 @@ def main() -> None:
                     if result is not None:
                         samples[label].append(result["steps_per_s"])
             row = {k: statistics.median(v) for k, v in samples.items() if v}
-            figures = ", ".join(f"{k} {v:.1f}" + (f" ({'/'.join(f'{x:.1f}' for x in samples[k])})" if len(samples[k]) > 1 else "")
-                                for k, v in row.items())
-            ratios = ", ".join(f"{k} {v / row['upstream']:.1f}x" for k, v in row.items()
-                               if not k.startswith("upstream") and "upstream" in row)
+            figures = ", ".join(
+                f"{k} {v:.1f}" + (f" ({'/'.join(f'{x:.1f}' for x in samples[k])})" if len(samples[k]) > 1 else "")
+                for k, v in row.items()
+            )
+            ratios = ", ".join(
+                f"{k} {v / row['upstream']:.1f}x"
+                for k, v in row.items()
+                if not k.startswith("upstream") and "upstream" in row
+            )
             if "upstream fixed" in row:
                 ratios += "; vs upstream fixed: " + ", ".join(
-                    f"{k} {v / row['upstream fixed']:.1f}x" for k, v in row.items() if not k.startswith("upstream"))
-            print(f"  {env_id:28s} {n} env(s): {figures}" + (f"  vs upstream: {ratios}" if ratios else "")
-                  + f"  [load {os.getloadavg()[0]:.1f}]", flush=True)
+                    f"{k} {v / row['upstream fixed']:.1f}x" for k, v in row.items() if not k.startswith("upstream")
+                )
+            print(
+                f"  {env_id:28s} {n} env(s): {figures}"
+                + (f"  vs upstream: {ratios}" if ratios else "")
+                + f"  [load {os.getloadavg()[0]:.1f}]",
+                flush=True,
+            )
 
 
 if __name__ == "__main__":

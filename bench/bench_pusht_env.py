@@ -50,7 +50,11 @@ def expert_loop(env, expert, episodes: int, options: dict | None, variation_keys
         obs, info = env.reset(seed=seed, options=options)
         extra = {f"{keys.VARIATION}.{k}": np.array([[_factor(env, k)]]) for k in variation_keys}
         for t in range(300):
-            infos = {keys.STATE: obs[keys.STATE][None, None], keys.GOAL_STATE: info[keys.GOAL_STATE][None, None], **extra}
+            infos = {
+                keys.STATE: obs[keys.STATE][None, None],
+                keys.GOAL_STATE: info[keys.GOAL_STATE][None, None],
+                **extra,
+            }
             t0 = time.perf_counter()
             action = expert.get_action(infos)[0]
             t_act, n_act = t_act + time.perf_counter() - t0, n_act + 1
@@ -84,7 +88,9 @@ def world_success(episodes: int) -> None:
     world.set_policy(swm.envs.expert_policy("swm/PushT-v2"))
     t0 = time.perf_counter()
     result = world.evaluate(episodes=episodes, seed=0)
-    print(f"World(num_envs=8).evaluate({episodes}, seed=0): success {result['success_rate']:.0f}% in {time.perf_counter() - t0:.1f} s")
+    print(
+        f"World(num_envs=8).evaluate({episodes}, seed=0): success {result['success_rate']:.0f}% in {time.perf_counter() - t0:.1f} s"
+    )
 
 
 def main() -> None:

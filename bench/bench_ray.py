@@ -41,15 +41,33 @@ def main() -> None:
         on_ray.init_ray(num_cpus=args.cpus, cache_dir=cache)
         startup = time.perf_counter() - t
         t = time.perf_counter()
-        on_ray.record_dataset_on_ray(args.env, "ray", args.episodes, seed=0, shards=args.cpus, image_size=args.image_size,
-                                     max_steps=limit, cache_dir=cache, progress=False)
+        on_ray.record_dataset_on_ray(
+            args.env,
+            "ray",
+            args.episodes,
+            seed=0,
+            shards=args.cpus,
+            image_size=args.image_size,
+            max_steps=limit,
+            cache_dir=cache,
+            progress=False,
+        )
         ray_s = time.perf_counter() - t
         rates[f"Ray, {args.cpus} shards of 1 env"] = args.episodes / ray_s
 
         tasks = 4 * args.cpus  # near-empty shards: what a task costs beyond its episodes
         t = time.perf_counter()
-        on_ray.record_dataset_on_ray(args.env, "tiny", tasks, seed=0, shards=tasks, image_size=args.image_size,
-                                     max_steps=limit, cache_dir=cache, progress=False)
+        on_ray.record_dataset_on_ray(
+            args.env,
+            "tiny",
+            tasks,
+            seed=0,
+            shards=tasks,
+            image_size=args.image_size,
+            max_steps=limit,
+            cache_dir=cache,
+            progress=False,
+        )
         tiny_s = time.perf_counter() - t
         one_episode = 1.0 / rates["World, 1 env(s), in process"]
         overhead = (tiny_s - tasks * one_episode / args.cpus) * args.cpus / tasks
@@ -61,7 +79,9 @@ def main() -> None:
     for label, rate in rates.items():
         print(f"  {label:34s} {rate:7.1f} episodes/s")
     print(f"  Ray startup (local, {args.cpus} CPUs)      {startup:7.2f} s (once per process)")
-    print(f"  overhead per Ray task                {overhead:7.2f} s (warm workers: World and policy built, shard opened)")
+    print(
+        f"  overhead per Ray task                {overhead:7.2f} s (warm workers: World and policy built, shard opened)"
+    )
 
 
 if __name__ == "__main__":

@@ -58,7 +58,9 @@ def run(args: argparse.Namespace) -> None:
     with make_world(ENV, 4, 64, args.max_steps, seed=0) as world:
         world.set_policy(make_policy("random", ENV, seed=0))
         world.record_dataset("toy-goal", episodes=args.episodes, seed=0, options=options)
-    print(f"recorded {args.episodes} random-policy episodes of {ENV} (goal fixed at {GOAL}) in {time.perf_counter() - start:.0f} s")
+    print(
+        f"recorded {args.episodes} random-policy episodes of {ENV} (goal fixed at {GOAL}) in {time.perf_counter() - start:.0f} s"
+    )
 
     def evaluate(policy: str, plan=None) -> tuple[SuccessSummary, float]:
         with make_world(ENV, args.num_envs, 64, args.max_steps, seed=args.seed) as world:
@@ -78,7 +80,11 @@ def run(args: argparse.Namespace) -> None:
         t = time.perf_counter()
         result = train(model, "toy-goal", "tiny", steps=args.steps, name=name, seed=0, progress=False, **overrides)
         trained = time.perf_counter() - t
-        val = [r["val/loss"] for r in map(json.loads, (result.folder / "metrics.jsonl").read_text().splitlines()) if "val/loss" in r]
+        val = [
+            r["val/loss"]
+            for r in map(json.loads, (result.folder / "metrics.jsonl").read_text().splitlines())
+            if "val/loss" in r
+        ]
         solver = "mppi" if model == "tdmpc2" else "cem"
         summary, seconds = evaluate(f"wm:{name}", PlanSettings(solver=solver, seed=args.seed))
         losses = f"{val[0]:.4f} -> {val[-1]:.4f}" if val else "n/a"

@@ -93,8 +93,12 @@ def bench_plans(args) -> None:
             space = gym.spaces.Box(-1, 1, (n, adim), np.float32)
             info = {"state": torch.randn(n, 1, 8)}
             solvers = {
-                "cem": CEMSolver(model, num_samples=samples, n_steps=steps, topk=30 if samples >= 300 else 10, device=args.device),
-                "mppi": MPPISolver(model, num_samples=samples, n_steps=steps, topk=30 if samples >= 300 else 10, device=args.device),
+                "cem": CEMSolver(
+                    model, num_samples=samples, n_steps=steps, topk=30 if samples >= 300 else 10, device=args.device
+                ),
+                "mppi": MPPISolver(
+                    model, num_samples=samples, n_steps=steps, topk=30 if samples >= 300 else 10, device=args.device
+                ),
                 "gd": GradientSolver(model, n_steps=steps, num_samples=32, device=args.device),
             }
             for name, solver in solvers.items():
@@ -132,7 +136,9 @@ def bench_policy(args) -> None:
         for _ in range(steps):
             world.step()
         elapsed = time.perf_counter() - t0
-    print(f"wm_policy_steps_per_s  TwoRoom 64x64 n_envs={n} CEM 300x30 H=5 block=5 rh=5  {n * steps / elapsed:9.1f} env-steps/s")
+    print(
+        f"wm_policy_steps_per_s  TwoRoom 64x64 n_envs={n} CEM 300x30 H=5 block=5 rh=5  {n * steps / elapsed:9.1f} env-steps/s"
+    )
 
 
 def main() -> None:

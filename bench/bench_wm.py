@@ -38,7 +38,10 @@ DEFAULT_PEER = HERE.parent.parent / "peer011-venv" / "bin" / "python"
 
 #: bench models: LeWM presets with a ViT encoder (upstream has no CNN encoder to rebuild ours)
 MODELS = {
-    "tiny-vit": ("tiny", {"encoder": "vit", "vit_size": "tiny", "patch_size": 8, "vit_overrides": {"num_hidden_layers": 2}}),
+    "tiny-vit": (
+        "tiny",
+        {"encoder": "vit", "vit_size": "tiny", "patch_size": 8, "vit_overrides": {"num_hidden_layers": 2}},
+    ),
     "paper": ("paper", {}),
 }
 
@@ -208,14 +211,15 @@ print("RESULT " + json.dumps(out))
 def run_side(python: str, side: str, params: dict) -> dict:
     env = {**os.environ, "PYTHONWARNINGS": "ignore", "OMP_WAIT_POLICY": os.environ.get("OMP_WAIT_POLICY", "PASSIVE")}
     cwd = HERE.parent if side == "ours" else tempfile.gettempdir()  # the peer must not import our checkout
-    proc = subprocess.run([python, "-c", CHILD, json.dumps({**params, "side": side})], cwd=cwd, env=env,
-                          capture_output=True, text=True)
+    proc = subprocess.run(
+        [python, "-c", CHILD, json.dumps({**params, "side": side})], cwd=cwd, env=env, capture_output=True, text=True
+    )
     line = next((x for x in proc.stdout.splitlines() if x.startswith("RESULT ")), None)
     if proc.returncode != 0 or line is None:
         tail = (proc.stderr or proc.stdout).strip().splitlines()[-6:]
         print(f"{side} FAILED (rc {proc.returncode}):\n  " + "\n  ".join(tail))
         return {}
-    return json.loads(line[len("RESULT "):])
+    return json.loads(line[len("RESULT ") :])
 
 
 def main() -> int:
@@ -247,15 +251,27 @@ def main() -> int:
         model = wm.make("lewm", preset, action_dim=action_dim, **overrides)
         folder = save_pretrained(model, "bench", config=config.target_tree(action_dim), cache_dir=cache).parent
         params = {
-            "folder": str(folder), "threads": args.threads, "envs": [int(e) for e in args.envs.split(",")],
-            "samples": args.samples, "iterations": args.iterations, "horizon": args.horizon, "frameskip": args.frameskip,
-            "action_dim": action_dim, "image_size": config.image_size, "history": config.history_size,
-            "repeats": args.repeats, "train_batch": args.train_batch, "train_steps": args.train_steps,
+            "folder": str(folder),
+            "threads": args.threads,
+            "envs": [int(e) for e in args.envs.split(",")],
+            "samples": args.samples,
+            "iterations": args.iterations,
+            "horizon": args.horizon,
+            "frameskip": args.frameskip,
+            "action_dim": action_dim,
+            "image_size": config.image_size,
+            "history": config.history_size,
+            "repeats": args.repeats,
+            "train_batch": args.train_batch,
+            "train_steps": args.train_steps,
             "num_proj": getattr(config, "sigreg_num_proj", 1024),
         }
-        print(f"LeWM '{args.model}' ({config.image_size}px, embed {config.embed_dim}, predictor depth {config.depth}), "
-              f"CEM {args.samples} x {args.iterations}, horizon {args.horizon} x frameskip {args.frameskip}, "
-              f"{args.threads} threads", flush=True)
+        print(
+            f"LeWM '{args.model}' ({config.image_size}px, embed {config.embed_dim}, predictor depth {config.depth}), "
+            f"CEM {args.samples} x {args.iterations}, horizon {args.horizon} x frameskip {args.frameskip}, "
+            f"{args.threads} threads",
+            flush=True,
+        )
         ours = run_side(sys.executable, "ours", params)
         peer = run_side(args.peer, "peer", params) if args.peer and Path(args.peer).exists() else {}
         if args.peer and not Path(args.peer).exists():
@@ -282,7 +298,12 @@ def main() -> int:
         row(f"model ms/plan, {b} env(s)", ours["model_ms"].get(key), peer.get("model_ms", {}).get(key))
         row(f"CEM plan ms, {b} env(s)", ours["plan_ms"].get(key), peer.get("plan_ms", {}).get(key))
     if args.train_batch:
-        row(f"train samples/s (batch {args.train_batch})", ours.get("train_samples_per_s"), peer.get("train_samples_per_s"), True)
+        row(
+            f"train samples/s (batch {args.train_batch})",
+            ours.get("train_samples_per_s"),
+            peer.get("train_samples_per_s"),
+            True,
+        )
     return 0
 
 

@@ -14,7 +14,9 @@ from stable_worldmodel.policy import RandomPolicy
 
 
 def steps_per_s(env: str, n: int, size: int, mode: str, steps: int) -> float:
-    world = swm.World(env, num_envs=n, image_shape=(size, size), verbose=0, vectorization_mode=mode, max_episode_steps=10**6)
+    world = swm.World(
+        env, num_envs=n, image_shape=(size, size), verbose=0, vectorization_mode=mode, max_episode_steps=10**6
+    )
     world.set_policy(RandomPolicy(seed=0))
     world.reset(seed=0)
     for _ in range(5):  # warm up
@@ -51,7 +53,9 @@ def main() -> None:
             row = [steps_per_s(args.env, n, size, mode, steps) for mode in ("sync", "async", "auto")]
             print(f"{n:>5} {size:>5} " + " ".join(f"{v:>10.0f}" for v in row))
     eps = 16 if args.quick else 64
-    print(f"evaluate: {evaluate_eps_per_s(args.env, 8, eps, 50):.2f} episodes/s (8 envs, 50-step episodes, random policy)")
+    print(
+        f"evaluate: {evaluate_eps_per_s(args.env, 8, eps, 50):.2f} episodes/s (8 envs, 50-step episodes, random policy)"
+    )
 
 
 if __name__ == "__main__":

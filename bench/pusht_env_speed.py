@@ -23,7 +23,9 @@ import stable_worldmodel  # noqa: F401  (registers swm/... ids)
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--size", type=int, default=64)
-    parser.add_argument("--env", default="swm/PushT-v1", help="swm/PushT-v1 (upstream behaviour) or swm/PushT-v2 (ours only)")
+    parser.add_argument(
+        "--env", default="swm/PushT-v1", help="swm/PushT-v1 (upstream behaviour) or swm/PushT-v2 (ours only)"
+    )
     parser.add_argument("--steps", type=int, default=2000)
     parser.add_argument("--repeats", type=int, default=3)
     args = parser.parse_args()
@@ -39,8 +41,10 @@ def main() -> None:
             env.step(a)
             env.render()
         best = max(best, args.steps / (time.perf_counter() - start))
-    print(f"{stable_worldmodel.__name__} {getattr(stable_worldmodel, '__version__', '?')}: PushT step+render at "
-          f"{frame.shape[0]}x{frame.shape[1]}: {best:.0f} steps/s (best of {args.repeats} x {args.steps})")
+    print(
+        f"{stable_worldmodel.__name__} {getattr(stable_worldmodel, '__version__', '?')}: PushT step+render at "
+        f"{frame.shape[0]}x{frame.shape[1]}: {best:.0f} steps/s (best of {args.repeats} x {args.steps})"
+    )
 
 
 if __name__ == "__main__":

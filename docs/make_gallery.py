@@ -53,7 +53,9 @@ def main() -> None:
         name = env_id.split("/")[-1]
         Image.fromarray(row).save(out / f"{name}.png")
         label = Image.new("RGB", (row.shape[1], 22), "white")
-        ImageDraw.Draw(label).text((4, 4), f"{env_id}: default, then 'variation': ['all'] with seeds 1..{args.variations}", fill="black")
+        ImageDraw.Draw(label).text(
+            (4, 4), f"{env_id}: default, then 'variation': ['all'] with seeds 1..{args.variations}", fill="black"
+        )
         rows.append(np.concatenate([np.asarray(label), row]))
     Image.fromarray(np.concatenate(rows, axis=0)).save(out / args.gallery)
     print(f"wrote {len(rows)} env pictures and {args.gallery} to {out}")

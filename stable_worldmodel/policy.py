@@ -9,7 +9,7 @@ actions shaped like the world's batched action space. ``WorldModelPolicy``,
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -38,6 +38,9 @@ _LAZY = {
 
 
 __getattr__ = lazy_getattr(__name__, _LAZY)
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .planning import AutoActionableModel, AutoCostModel, WorldModelPolicy  # noqa: F401 (lazy re-exports)
 
 
 @runtime_checkable
@@ -196,7 +199,9 @@ class FeedForwardPolicy(BasePolicy):
       the model is put in eval mode.
     """
 
-    def __init__(self, model: Any, process: dict[str, Transformable] | None = None, transform: dict | None = None, **kwargs: Any):
+    def __init__(
+        self, model: Any, process: dict[str, Transformable] | None = None, transform: dict | None = None, **kwargs: Any
+    ):
         super().__init__(**kwargs)
         self.type = "feed_forward"
         self.model = model

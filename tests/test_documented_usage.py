@@ -276,7 +276,12 @@ def test_003_quick_start_dataset_and_videos(in_tmp_cwd, _stablewm_home):
     Path("videos_goal").mkdir()
     full = HDF5Dataset(name="pusht_random", num_steps=4)
     record_video_from_dataset(
-        video_path="./videos_goal/", dataset=full, episode_idx=[0, 1, 2], max_steps=5, fps=30, viewname=["pixels", "goal"]
+        video_path="./videos_goal/",
+        dataset=full,
+        episode_idx=[0, 1, 2],
+        max_steps=5,
+        fps=30,
+        viewname=["pixels", "goal"],
     )
     assert _names("videos_goal") == ["episode_0.mp4", "episode_1.mp4", "episode_2.mp4"]
 

@@ -20,7 +20,9 @@ def _rgb_box_without_channels(tmp_path):
 
 
 def _constraint_never_satisfied(tmp_path):
-    swm.spaces.Box(low=np.zeros(2), high=np.ones(2), init_value=np.zeros(2, np.float32), constrain_fn=lambda x: False).sample()
+    swm.spaces.Box(
+        low=np.zeros(2), high=np.ones(2), init_value=np.zeros(2, np.float32), constrain_fn=lambda x: False
+    ).sample()
 
 
 def _merge_nothing(tmp_path):

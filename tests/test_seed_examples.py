@@ -22,12 +22,7 @@ def test_world_quick_start():
     from stable_worldmodel.policy import RandomPolicy
 
     # 1. Initialize the World with 4 parallel environments
-    world = World(
-        env_name="swm/PushT-v1",
-        num_envs=4,
-        image_shape=(64, 64),
-        history_size=1
-    )
+    world = World(env_name="swm/PushT-v1", num_envs=4, image_shape=(64, 64), history_size=1)
 
     # 2. Set a policy (e.g., Random)
     world.set_policy(RandomPolicy())
@@ -46,19 +41,11 @@ def test_record_video_example():
     from stable_worldmodel import World
     from stable_worldmodel.policy import RandomPolicy
 
-    world = World(
-        env_name="swm/PushT-v1",
-        num_envs=1,
-        image_shape=(64, 64)
-    )
+    world = World(env_name="swm/PushT-v1", num_envs=1, image_shape=(64, 64))
     world.set_policy(RandomPolicy())
 
     # Record a 500-step video
-    world.record_video(
-        video_path="./videos",
-        max_steps=500,
-        viewname="pixels"
-    )
+    world.record_video(video_path="./videos", max_steps=500, viewname="pixels")
     videos = sorted(Path("videos").glob("*.mp4"))
     assert len(videos) == 1 and videos[0].stat().st_size > 1000
 
@@ -70,22 +57,18 @@ def test_record_dataset_then_evaluate_from_dataset():
     world = World(
         env_name="swm/PushT-v1",
         num_envs=4,  # Collect 4 episodes in parallel
-        image_shape=(64, 64)
+        image_shape=(64, 64),
     )
     world.set_policy(RandomPolicy())
 
     # Record 50 episodes to a .h5 dataset
-    world.record_dataset(
-        dataset_name="pusht_random",
-        episodes=50,
-        cache_dir="./data"
-    )
+    world.record_dataset(dataset_name="pusht_random", episodes=50, cache_dir="./data")
     # Result: ./data/pusht_random.h5
     assert Path("data/pusht_random.h5").is_file()
 
     from stable_worldmodel import World
     from stable_worldmodel.data import HDF5Dataset
-    from stable_worldmodel.policy import RandomPolicy # or your trained policy
+    from stable_worldmodel.policy import RandomPolicy  # or your trained policy
 
     # 1. Load a dataset for initial states
     dataset = HDF5Dataset("pusht_random", cache_dir="./data")
@@ -98,9 +81,9 @@ def test_record_dataset_then_evaluate_from_dataset():
     results = world.evaluate_from_dataset(
         dataset=dataset,
         episodes_idx=[0, 1, 2, 3],  # Episodes to test on
-        start_steps=[0, 0, 0, 0],   # Start from beginning
-        goal_offset_steps=50,       # Goal is state at t=50
-        eval_budget=100             # Max steps to reach goal
+        start_steps=[0, 0, 0, 0],  # Start from beginning
+        goal_offset_steps=50,  # Goal is state at t=50
+        eval_budget=100,  # Max steps to reach goal
     )
 
     print(f"Success Rate: {results['success_rate']}%")
@@ -111,11 +94,7 @@ def test_record_dataset_then_evaluate_from_dataset():
 def test_per_env_options_example():
     from stable_worldmodel import World
 
-    world = World(
-        env_name="swm/PushT-v1",
-        num_envs=3,
-        image_shape=(64, 64)
-    )
+    world = World(env_name="swm/PushT-v1", num_envs=3, image_shape=(64, 64))
 
     # Different variations for each environment
     per_env_options = [

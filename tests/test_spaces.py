@@ -40,8 +40,9 @@ def test_seed_box_example():
 
 
 def test_seed_dict_example():
-    from stable_worldmodel import spaces
     import numpy as np
+
+    from stable_worldmodel import spaces
 
     config = spaces.Dict(
         {
@@ -81,7 +82,9 @@ def test_seed_dict_constraint_note_reads_top_level_value():
             self.config_space = spaces.Dict(
                 {
                     "world": spaces.Dict({"width": spaces.Discrete(n=100, init_value=50)}),
-                    "player_pos": spaces.Box(low=np.array([0, 0]), high=np.array([99, 99]), init_value=np.array([25, 25])),
+                    "player_pos": spaces.Box(
+                        low=np.array([0, 0]), high=np.array([99, 99]), init_value=np.array([25, 25])
+                    ),
                 },
                 constrain_fn=lambda _: self.validate_config(),
             )

@@ -24,8 +24,10 @@ def game_space(**leaf_kwargs) -> Dict:
         return Discrete(10, **{**leaf_kwargs, **kw})
 
     world = Dict({"w": leaf(init_value=1), "h": leaf(init_value=2)}, sampling_order=["h", "w"])
-    game = Dict({"level": leaf(init_value=3), "world": world, "speed": leaf(init_value=4)},
-                sampling_order=["world", "speed", "level"])
+    game = Dict(
+        {"level": leaf(init_value=3), "world": world, "speed": leaf(init_value=4)},
+        sampling_order=["world", "speed", "level"],
+    )
     return Dict({"z": leaf(init_value=5), "game": game, "a": leaf(init_value=6)}, sampling_order=["game", "a", "z"])
 
 
@@ -109,7 +111,14 @@ def test_dict_init_value_out_of_bounds_is_accepted_and_reported(warnings_seen):
 
 def test_sampling_order_lists_nested_dict_nodes_like_0_0_3():
     assert game_space().sampling_order == [
-        "game", "game.world", "game.world.h", "game.world.w", "game.speed", "game.level", "a", "z",
+        "game",
+        "game.world",
+        "game.world.h",
+        "game.world.w",
+        "game.speed",
+        "game.level",
+        "a",
+        "z",
     ]
     assert game_space()["game"].sampling_order == ["world", "world.h", "world.w", "speed", "level"]
 
@@ -127,7 +136,14 @@ def test_setting_sampling_order_changes_sample_and_update_order():
     space = game_space()
     space.sampling_order = ["a", "game.speed", "game.world.w"]
     assert space.sampling_order == [
-        "a", "game", "game.speed", "game.world", "game.world.w", "game.world.h", "game.level", "z",
+        "a",
+        "game",
+        "game.speed",
+        "game.world",
+        "game.world.w",
+        "game.world.h",
+        "game.level",
+        "z",
     ]
     assert draw_order(space, Dict.sample) == ["a", "game.speed", "game.world.w", "game.world.h", "game.level", "z"]
     drawn = draw_order(space, lambda s: s.update(["z", "game.level", "game.world"]))
@@ -208,10 +224,12 @@ def test_replacing_spaces_logging_object_captures_warnings():
 
 
 def tree() -> Dict:
-    return Dict({
-        "a": Discrete(10, init_value=0),
-        "b": Dict({"c": Discrete(10, init_value=1), "d": Box(0.0, 1.0, shape=(), init_value=0.5)}),
-    })
+    return Dict(
+        {
+            "a": Discrete(10, init_value=0),
+            "b": Dict({"c": Discrete(10, init_value=1), "d": Box(0.0, 1.0, shape=(), init_value=0.5)}),
+        }
+    )
 
 
 def test_reset_variation_space_without_options_resets_to_init_values():

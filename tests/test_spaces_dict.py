@@ -28,17 +28,26 @@ def make_nested() -> Dict:
 
 def make_pusht_like() -> Dict:
     """About 16 leaves, like the PushT variation space."""
-    part = lambda: Dict({"color": RGBBox(), "scale": Box(0.5, 1.5, shape=()), "angle": Box(-np.pi, np.pi, shape=())})
+    def part() -> Dict:
+        return Dict({"color": RGBBox(), "scale": Box(0.5, 1.5, shape=()), "angle": Box(-np.pi, np.pi, shape=())})
+
     space = Dict(
         {
             "agent": part(),
             "block": Dict({"color": RGBBox(), "scale": Box(0.5, 1.5, shape=()), "shape": Discrete(3)}),
             "goal": Dict(
-                {"color": RGBBox(), "pos": Box(0.0, 512.0, shape=(2,)), "angle": Box(-np.pi, np.pi, shape=()), "scale": Box(0.5, 1.5)}
+                {
+                    "color": RGBBox(),
+                    "pos": Box(0.0, 512.0, shape=(2,)),
+                    "angle": Box(-np.pi, np.pi, shape=()),
+                    "scale": Box(0.5, 1.5),
+                }
             ),
             "background": Dict({"color": RGBBox()}),
             "rendering": Dict({"render_goal": Discrete(2), "line_width": Discrete(4, start=1)}),
-            "physics": Dict({"friction": Box(0.0, 1.0, shape=()), "damping": MultiDiscrete([3, 3]), "mass": Box(0.1, 2.0)}),
+            "physics": Dict(
+                {"friction": Box(0.0, 1.0, shape=()), "damping": MultiDiscrete([3, 3]), "mass": Box(0.1, 2.0)}
+            ),
         }
     )
     space.seed(12345)
@@ -149,8 +158,16 @@ def test_update_all_and_string_key():
 
 def test_update_parent_and_child_resamples_whole_subtree():
     calls = []
-    space = Dict({"p": Dict({"x": Discrete(9, constrain_fn=lambda v: calls.append("x") or True),
-                             "y": Discrete(9, constrain_fn=lambda v: calls.append("y") or True)})})
+    space = Dict(
+        {
+            "p": Dict(
+                {
+                    "x": Discrete(9, constrain_fn=lambda v: calls.append("x") or True),
+                    "y": Discrete(9, constrain_fn=lambda v: calls.append("y") or True),
+                }
+            )
+        }
+    )
     space.sample()
     calls.clear()
     space.update(["p.x", "p"])

@@ -30,9 +30,19 @@ from stable_worldmodel.spaces import Box, Dict, Discrete, MultiDiscrete
         (lambda: MultiDiscrete(["a", "b"]), ["nvec as an array of integers", "'a'"]),
     ],
     ids=[
-        "box-low>high", "box-low>high-array", "box-nan-low", "box-nan-high", "box-shapes", "box-non-numeric",
-        "discrete-0", "discrete-negative", "discrete-float", "multidiscrete-0", "multidiscrete-negative",
-        "multidiscrete-fraction", "multidiscrete-strings",
+        "box-low>high",
+        "box-low>high-array",
+        "box-nan-low",
+        "box-nan-high",
+        "box-shapes",
+        "box-non-numeric",
+        "discrete-0",
+        "discrete-negative",
+        "discrete-float",
+        "multidiscrete-0",
+        "multidiscrete-negative",
+        "multidiscrete-fraction",
+        "multidiscrete-strings",
     ],
 )
 def test_bad_constructor_arguments_raise_space_error(make, fragments):

@@ -18,8 +18,8 @@ Bad input exits non-zero with one ``Error: ...`` line (``SWM_DEBUG=1`` shows the
 
 from __future__ import annotations
 
-from .root import app, common, main
 from .display import display_dataset_info, display_world_info
 from .resources import delete, list_cmd, show
+from .root import app, common, main
 
 __all__ = ["app", "common", "delete", "display_dataset_info", "display_world_info", "list_cmd", "main", "show"]

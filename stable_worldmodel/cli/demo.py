@@ -50,9 +50,11 @@ def plot_success_rates(summaries: Sequence[SuccessSummary], path: Path, title: s
         colors = [palette[i % len(palette)] for i in range(len(summaries))]
         labels = [s.label.replace("+", "\n+") for s in summaries]  # lewm+cem+graph on three short lines
         bars = ax.bar(labels, rates, yerr=[lows, highs], capsize=8, color=colors, edgecolor="black", linewidth=0.6)
-        for bar, s, top in zip(bars, summaries, highs):
+        for bar, s, top in zip(bars, summaries, highs, strict=False):
             label = f"{100 * s.rate:.0f}% ({s.successes}/{s.episodes})"
-            ax.annotate(label, (bar.get_x() + bar.get_width() / 2, 100 * s.rate + top + 2), ha="center", va="bottom", fontsize=8)
+            ax.annotate(
+                label, (bar.get_x() + bar.get_width() / 2, 100 * s.rate + top + 2), ha="center", va="bottom", fontsize=8
+            )
         ax.set_ylim(0, 112)
         ax.set_ylabel("success rate (%)")
         ax.set_title(title, fontsize=9)
@@ -73,20 +75,31 @@ def _record_rollout(env: str, policy: str, path: Path, seed: int, image_size: in
     A learned model resizes the frames to its own image size; the video keeps ``image_size``."""
     from .worlds import make_policy, make_world
 
-    with tempfile.TemporaryDirectory(dir=path.parent) as tmp, make_world(env, 1, image_size, max_steps, seed=seed, verbose=0) as world:
+    with (
+        tempfile.TemporaryDirectory(dir=path.parent) as tmp,
+        make_world(env, 1, image_size, max_steps, seed=seed, verbose=0) as world,
+    ):
         world.set_policy(make_policy(policy, env, seed=seed, plan=plan))
         (video,) = world.record_video(tmp, max_steps=max_steps, fps=10, seed=seed)
         shutil.move(str(video), path)
     return path
 
 
-def _write_results(path: Path, env: str, seed: int, summaries: Sequence[SuccessSummary], dataset: Path, model: dict | None) -> None:
+def _write_results(
+    path: Path, env: str, seed: int, summaries: Sequence[SuccessSummary], dataset: Path, model: dict | None
+) -> None:
     record = {
         "env": env,
         "dataset": str(dataset),
         "eval_seeds": [seed, seed + summaries[0].episodes - 1],
         "policies": {
-            s.label: {"episodes": s.episodes, "successes": s.successes, "success_rate": round(s.rate, 4), "ci95": [round(v, 4) for v in s.interval], "mean_length": round(s.mean_length, 2)}
+            s.label: {
+                "episodes": s.episodes,
+                "successes": s.successes,
+                "success_rate": round(s.rate, 4),
+                "ci95": [round(v, 4) for v in s.interval],
+                "mean_length": round(s.mean_length, 2),
+            }
             for s in summaries
         },
     }
@@ -96,18 +109,49 @@ def _write_results(path: Path, env: str, seed: int, summaries: Sequence[SuccessS
 
 
 def demo(
-    env: Annotated[str, typer.Option("--env", metavar="ENV", help="Environment id (it needs an expert; see `swm envs`).")] = DEFAULT_ENV,
-    episodes: Annotated[int, typer.Option("--episodes", "-n", parser=int_in(1), metavar="N", help="Expert episodes to record.")] = 300,
-    eval_episodes: Annotated[int, typer.Option("--eval-episodes", parser=int_in(1), metavar="N", help="Evaluation episodes per policy.")] = 50,
-    out: Annotated[Path, typer.Option("--out", metavar="DIR", help="Folder for the videos, the plot and results.json.", file_okay=False)] = DEFAULT_OUT,
+    env: Annotated[
+        str, typer.Option("--env", metavar="ENV", help="Environment id (it needs an expert; see `swm envs`).")
+    ] = DEFAULT_ENV,
+    episodes: Annotated[
+        int, typer.Option("--episodes", "-n", parser=int_in(1), metavar="N", help="Expert episodes to record.")
+    ] = 300,
+    eval_episodes: Annotated[
+        int, typer.Option("--eval-episodes", parser=int_in(1), metavar="N", help="Evaluation episodes per policy.")
+    ] = 50,
+    out: Annotated[
+        Path,
+        typer.Option("--out", metavar="DIR", help="Folder for the videos, the plot and results.json.", file_okay=False),
+    ] = DEFAULT_OUT,
     seed: SeedOpt = 0,
     image_size: ImageSizeOpt = 64,
     max_steps: MaxStepsOpt = None,
-    model: Annotated[str, typer.Option("--model", metavar="MODEL", help="World model to train (lewm, pldm, dummy); 'none' skips training and planning.")] = "lewm",
-    train_steps: Annotated[int | None, typer.Option("--train-steps", parser=int_in(1), metavar="N", help="Training steps (default: the tiny preset's).", show_default=False)] = None,
-    samples: Annotated[int, typer.Option("--samples", parser=int_in(1), metavar="S", help="CEM candidates per iteration.")] = 300,
-    iterations: Annotated[int, typer.Option("--iterations", parser=int_in(1), metavar="K", help="CEM iterations per plan.")] = 30,
-    num_envs: Annotated[int, typer.Option("--num-envs", parser=int_in(1), metavar="K", help="Environments stepped together.")] = 10,
+    model: Annotated[
+        str,
+        typer.Option(
+            "--model",
+            metavar="MODEL",
+            help="World model to train (lewm, pldm, dummy); 'none' skips training and planning.",
+        ),
+    ] = "lewm",
+    train_steps: Annotated[
+        int | None,
+        typer.Option(
+            "--train-steps",
+            parser=int_in(1),
+            metavar="N",
+            help="Training steps (default: the tiny preset's).",
+            show_default=False,
+        ),
+    ] = None,
+    samples: Annotated[
+        int, typer.Option("--samples", parser=int_in(1), metavar="S", help="CEM candidates per iteration.")
+    ] = 300,
+    iterations: Annotated[
+        int, typer.Option("--iterations", parser=int_in(1), metavar="K", help="CEM iterations per plan.")
+    ] = 30,
+    num_envs: Annotated[
+        int, typer.Option("--num-envs", parser=int_in(1), metavar="K", help="Environments stepped together.")
+    ] = 10,
 ) -> None:
     """Collect expert data, train a world model on it, evaluate random vs expert vs the model
     planning with CEM (LeWM / PLDM also with --subgoals graph), and write videos, a plot and results.json.
@@ -125,10 +169,11 @@ def demo(
     learn = model != "none"
     if learn:
         from ..wm import get_config_class, list_models
-
         from .errors import check_choice
 
-        check_choice("world model", model, [m for m in list_models() if m != "frame"])  # a frame decoder needs a source run
+        check_choice(
+            "world model", model, [m for m in list_models() if m != "frame"]
+        )  # a frame decoder needs a source run
     out = output_dir(out, "swm demo --out")
     con = console()
     name = "demo-" + default_dataset_name(env, "expert")
@@ -139,7 +184,9 @@ def demo(
     if resolve_dataset_path(name).exists():
         delete_dataset(name)
     with make_world(env, min(4, episodes), image_size, max_steps, seed=seed) as world:
-        world.set_policy(make_policy("expert", env, seed=seed, noise=recording_noise("expert", env, None)))  # as swm collect
+        world.set_policy(
+            make_policy("expert", env, seed=seed, noise=recording_noise("expert", env, None))
+        )  # as swm collect
         dataset = world.record_dataset(name, episodes=episodes, seed=seed)
     display_dataset_info(dataset_info(name))
 
@@ -154,27 +201,45 @@ def demo(
         con.rule(f"[{next(step)}/{total}] Training a tiny {model} on {name}")
         shutil.rmtree(checkpoint_root() / run, ignore_errors=True)
         result = train(model, name, "tiny", steps=train_steps, name=run, seed=seed, progress=sys.stderr.isatty())
-        con.print(f"{result.steps} steps in {result.seconds:.0f} s ({result.samples_per_second:.0f} samples/s), train loss {result.train_loss:.4f}; checkpoint {result.folder}", soft_wrap=True)
+        con.print(
+            f"{result.steps} steps in {result.seconds:.0f} s ({result.samples_per_second:.0f} samples/s), train loss {result.train_loss:.4f}; checkpoint {result.folder}",
+            soft_wrap=True,
+        )
         plan = PlanSettings(solver="cem", samples=samples, iterations=iterations, seed=seed, subgoals="none")
         policies.append((f"{model}+cem", f"wm:{run}", plan))
-        model_record = {"run": run, "checkpoint": str(result.folder), "steps": result.steps, "train_seconds": round(result.seconds, 1), "plan": plan.as_dict()}
+        model_record = {
+            "run": run,
+            "checkpoint": str(result.folder),
+            "steps": result.steps,
+            "train_seconds": round(result.seconds, 1),
+            "plan": plan.as_dict(),
+        }
         if get_config_class(model).subgoal_graph:  # the same model and CEM, aiming at waypoints of the training data
             graph = PlanSettings(solver="cem", samples=samples, iterations=iterations, seed=seed, subgoals="graph")
             policies.append((f"{model}+cem+graph", f"wm:{run}", graph))
             model_record["plan_graph"] = graph.as_dict()
 
     eval_seed = seed + EVAL_SEED_OFFSET
-    con.rule(f"[{next(step)}/{total}] Evaluating {', '.join(label for label, *_ in policies)} on the same {eval_episodes} seeds")
+    con.rule(
+        f"[{next(step)}/{total}] Evaluating {', '.join(label for label, *_ in policies)} on the same {eval_episodes} seeds"
+    )
     summaries = []
     with make_world(env, min(num_envs, eval_episodes), image_size, max_steps, seed=eval_seed) as world:
         for label, policy, plan in policies:
             results = evaluate_policy(world, policy, eval_episodes, eval_seed, plan=plan)
             summaries.append(SuccessSummary.from_results(label, results))
-    con.print(success_table(f"{env}: seeds {eval_seed}..{eval_seed + eval_episodes - 1}, at most {max_steps} steps", summaries))
+    con.print(
+        success_table(
+            f"{env}: seeds {eval_seed}..{eval_seed + eval_episodes - 1}, at most {max_steps} steps", summaries
+        )
+    )
 
     con.rule(f"[{next(step)}/{total}] Recording one rollout video per policy")
     video_size = max(image_size, VIDEO_MIN_SIZE)  # the envs draw at any size: make the videos legible
-    videos = [_record_rollout(env, p, out / f"{label}.mp4", eval_seed, video_size, max_steps, plan=plan) for label, p, plan in policies]
+    videos = [
+        _record_rollout(env, p, out / f"{label}.mp4", eval_seed, video_size, max_steps, plan=plan)
+        for label, p, plan in policies
+    ]
     con.print("Videos: " + ", ".join(str(v) for v in videos), soft_wrap=True)
 
     con.rule(f"[{next(step)}/{total}] Plotting success rates with 95% confidence intervals")

@@ -164,11 +164,16 @@ def display_dataset_info(info: dict[str, Any]) -> None:
         [
             ("episodes", info.get("num_episodes")),
             ("steps", info.get("num_steps")),
-            ("episode length", Text(f"{lengths['min']}..{lengths['max']} (mean {lengths['mean']:.1f})") if lengths else None),
+            (
+                "episode length",
+                Text(f"{lengths['min']}..{lengths['max']} (mean {lengths['mean']:.1f})") if lengths else None,
+            ),
         ]
         + [(k, info[k]) for k in ("format", "env_name") if info.get(k) is not None],
     )
-    shapes = _kv_table("Shapes", [(k.removesuffix("_shape"), info.get(k)) for k in ("obs_shape", "action_shape", "goal_shape")])
+    shapes = _kv_table(
+        "Shapes", [(k.removesuffix("_shape"), info.get(k)) for k in ("obs_shape", "action_shape", "goal_shape")]
+    )
     for column, shape in (info.get("column_shapes") or {}).items():
         shapes.add_row(f"  {column}", short(shape))
     grid = Table.grid(padding=(0, 4))
@@ -178,7 +183,9 @@ def display_dataset_info(info: dict[str, Any]) -> None:
     if info.get("path"):
         parts.append(Text.assemble(("path ", "bold"), str(info["path"])))
     tree = names_tree("variation", variation_names(info.get("variation")))
-    console().print(Panel(Group(*parts, Text(""), tree), title=f"[bold]dataset[/] {info.get('name', '?')}", expand=False))
+    console().print(
+        Panel(Group(*parts, Text(""), tree), title=f"[bold]dataset[/] {info.get('name', '?')}", expand=False)
+    )
 
 
 def _space_rows(space: Mapping[str, Any] | None) -> list[tuple[str, Any]]:
@@ -201,7 +208,10 @@ def display_world_info(info: dict[str, Any]) -> None:
     ``observation_space``, ``action_space`` (SpaceInfo dicts) and ``variation``.
     """
     grid = Table.grid(padding=(0, 4))
-    grid.add_row(_space_table("Observation space", info.get("observation_space")), _space_table("Action space", info.get("action_space")))
+    grid.add_row(
+        _space_table("Observation space", info.get("observation_space")),
+        _space_table("Action space", info.get("action_space")),
+    )
     tree = names_tree("factors of variation", variation_names(info.get("variation")))
     console().print(Panel(Group(grid, Text(""), tree), title=f"[bold]world[/] {info.get('name', '?')}", expand=False))
 
@@ -235,7 +245,10 @@ def display_model_info(info: dict[str, Any]) -> None:
     rows: list[tuple[str, Any]] = [("format", info.get("format")), ("path", Text(str(info.get("path", "-"))))]
     if "parameters" in info:
         tensors = info.get("tensors")
-        rows += [("target", info.get("target")), ("parameters", Text(_count(int(info["parameters"])) + (f" in {tensors} tensors" if tensors else "")))]
+        rows += [
+            ("target", info.get("target")),
+            ("parameters", Text(_count(int(info["parameters"])) + (f" in {tensors} tensors" if tensors else ""))),
+        ]
     files = Table(title="Files", title_justify="left", box=None, pad_edge=False, show_header=False)
     files.add_column(style="cyan")
     files.add_column(justify="right")
@@ -255,16 +268,28 @@ def display_model_type_info(info: dict[str, Any]) -> None:
     config fields with their defaults (``info`` from
     :func:`stable_worldmodel.cli.resources.model_type_info`)."""
     rows: list[tuple[str, Any]] = [
-        ("config", info["config"]), ("train", f"swm train {info['name']} --dataset NAME [--preset P] [--set KEY=VALUE]"),
-        ("evaluate", f"swm eval ENV --policy {info['policy']}"), ("needs reward", "yes" if info["needs_reward"] else "no"),
+        ("config", info["config"]),
+        ("train", f"swm train {info['name']} --dataset NAME [--preset P] [--set KEY=VALUE]"),
+        ("evaluate", f"swm eval ENV --policy {info['policy']}"),
+        ("needs reward", "yes" if info["needs_reward"] else "no"),
     ]
-    presets = Table(title="Presets (the fields each sets)", title_justify="left", box=None, pad_edge=False, show_header=False)
+    presets = Table(
+        title="Presets (the fields each sets)", title_justify="left", box=None, pad_edge=False, show_header=False
+    )
     presets.add_column(style="bold cyan")
     presets.add_column()
     for name, values in info["presets"].items():
         presets.add_row(name, Text(", ".join(f"{k}={v!r}" for k, v in values.items())))
     fields = _kv_table("Fields (defaults)", [(name, Text(repr(value))) for name, value in info["fields"]])
-    parts: list[Any] = [Text(info["summary"]), Text(""), _kv_table("Overview", rows), Text(""), presets, Text(""), fields]
+    parts: list[Any] = [
+        Text(info["summary"]),
+        Text(""),
+        _kv_table("Overview", rows),
+        Text(""),
+        presets,
+        Text(""),
+        fields,
+    ]
     console().print(Panel(Group(*parts), title=f"[bold]model type[/] {info['name']}", expand=False))
 
 
@@ -295,6 +320,11 @@ def success_table(title: str, summaries: Sequence[Any]) -> Table:
     for s in summaries:
         low, high = s.interval
         table.add_row(
-            s.label, str(s.episodes), str(s.successes), f"{100 * s.rate:.1f}%", f"[{100 * low:.1f}, {100 * high:.1f}]", f"{s.mean_length:.1f}"
+            s.label,
+            str(s.episodes),
+            str(s.successes),
+            f"{100 * s.rate:.1f}%",
+            f"[{100 * low:.1f}, {100 * high:.1f}]",
+            f"{s.mean_length:.1f}",
         )
     return table

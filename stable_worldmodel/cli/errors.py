@@ -122,4 +122,3 @@ def output_file(path, option: str):
     if path.exists() and not os.access(path, os.W_OK):
         raise ConfigError(f"{option} requires a file it can write, got {str(path)!r} (permission denied)")
     return path
-

@@ -17,7 +17,9 @@ from .worlds import checkpoint_run, evaluate_policy, make_policy, make_world, po
 __all__ = ["dataset_starts", "evaluate_cli"]
 
 
-def dataset_starts(dataset: Any, episodes: int, goal_offset: int, seed: int, pool: Sequence[int] | None = None) -> tuple[list[int], list[int]]:
+def dataset_starts(
+    dataset: Any, episodes: int, goal_offset: int, seed: int, pool: Sequence[int] | None = None
+) -> tuple[list[int], list[int]]:
     """``episodes`` (episode, start step) pairs with ``start + goal_offset < length``, drawn with
     ``seed`` from ``pool`` (default: every episode), without repeating a pair while possible."""
     lengths = np.asarray(dataset.lengths)
@@ -37,7 +39,9 @@ def dataset_starts(dataset: Any, episodes: int, goal_offset: int, seed: int, poo
     return [e for e, _ in chosen], [s for _, s in chosen]
 
 
-def _from_dataset(world: Any, name: str, episodes: int, goal_offset: int, budget: int, seed: int, pool: Sequence[int] | None) -> dict:
+def _from_dataset(
+    world: Any, name: str, episodes: int, goal_offset: int, budget: int, seed: int, pool: Sequence[int] | None
+) -> dict:
     from ..data import HDF5Dataset
 
     dataset = HDF5Dataset(name, preload=False)
@@ -47,17 +51,39 @@ def _from_dataset(world: Any, name: str, episodes: int, goal_offset: int, budget
     for i in range(0, episodes, n):
         chunk_e, chunk_s = eps[i : i + n], starts[i : i + n]
         pad = n - len(chunk_e)  # the last chunk fills the spare envs with repeats, then drops them
-        out = world.evaluate_from_dataset(dataset, chunk_e + chunk_e[:1] * pad, chunk_s + chunk_s[:1] * pad, goal_offset, budget, save_video=False)
+        out = world.evaluate_from_dataset(
+            dataset, chunk_e + chunk_e[:1] * pad, chunk_s + chunk_s[:1] * pad, goal_offset, budget, save_video=False
+        )
         successes += list(np.asarray(out["episode_successes"])[: n - pad])
         steps += list(np.asarray(out["steps_to_success"])[: n - pad])
     lengths = [s if s >= 0 else budget for s in steps]
-    return {"episode_successes": np.asarray(successes, bool), "episode_lengths": np.asarray(lengths), "episodes_idx": eps, "start_steps": starts}
+    return {
+        "episode_successes": np.asarray(successes, bool),
+        "episode_lengths": np.asarray(lengths),
+        "episodes_idx": eps,
+        "start_steps": starts,
+    }
 
 
 def evaluate_cli(
-    env: str, policy: str, *, episodes: int, seed: int, variation: Sequence[str], num_envs: int, max_steps: int,
-    image_size: int, plan: Any = None, device: str = "auto", from_dataset: str | None = None, goal_offset: int = 25,
-    budget: int = 50, video: Path | None = None, decoder: str | None = None, ray: bool = False, ray_address: str | None = None,
+    env: str,
+    policy: str,
+    *,
+    episodes: int,
+    seed: int,
+    variation: Sequence[str],
+    num_envs: int,
+    max_steps: int,
+    image_size: int,
+    plan: Any = None,
+    device: str = "auto",
+    from_dataset: str | None = None,
+    goal_offset: int = 25,
+    budget: int = 50,
+    video: Path | None = None,
+    decoder: str | None = None,
+    ray: bool = False,
+    ray_address: str | None = None,
 ) -> tuple[SuccessSummary, str, dict[str, Any]]:
     """Evaluate ``policy`` and return its summary, a table title and the JSON record (``ray``:
     the episodes spread over Ray tasks, see :func:`stable_worldmodel.world.on_ray.evaluate_on_ray`)."""
@@ -66,7 +92,14 @@ def evaluate_cli(
         from ..planning.learned import resolve_subgoals
 
         plan = resolve_subgoals(checkpoint_run(policy), plan)
-    record: dict[str, Any] = {"env": env, "policy": policy, "episodes": episodes, "seed": seed, "num_envs": num_envs, "image_size": image_size}
+    record: dict[str, Any] = {
+        "env": env,
+        "policy": policy,
+        "episodes": episodes,
+        "seed": seed,
+        "num_envs": num_envs,
+        "image_size": image_size,
+    }
     limit = budget if from_dataset else max_steps
     history = policy_history(policy)
     if history > 1:
@@ -75,24 +108,52 @@ def evaluate_cli(
     if ray or ray_address:
         from ..world.on_ray import evaluate_on_ray
 
-        results = evaluate_on_ray(env, policy, episodes, seed, factors=variation, image_size=image_size, max_steps=max_steps,
-                                  plan=plan, device=device, address=ray_address, progress=False)
+        results = evaluate_on_ray(
+            env,
+            policy,
+            episodes,
+            seed,
+            factors=variation,
+            image_size=image_size,
+            max_steps=max_steps,
+            plan=plan,
+            device=device,
+            address=ray_address,
+            progress=False,
+        )
         title = f"{env}: seeds {seed}..{seed + episodes - 1}, at most {max_steps} steps (on Ray)"
-        record.update(protocol="seeds", seeds=[seed, seed + episodes - 1], max_steps=max_steps, variation=list(variation), ray=ray_address or "local")
+        record.update(
+            protocol="seeds",
+            seeds=[seed, seed + episodes - 1],
+            max_steps=max_steps,
+            variation=list(variation),
+            ray=ray_address or "local",
+        )
         return _finish(policy, results, record, plan, start), title, record
-    with make_world(env, num_envs=num_envs, image_size=image_size, max_steps=steps, seed=seed, history_size=history) as world:
+    with make_world(
+        env, num_envs=num_envs, image_size=image_size, max_steps=steps, seed=seed, history_size=history
+    ) as world:
         if from_dataset:
             pol = make_policy(policy, env, seed=seed, plan=plan, device=device)
             world.set_policy(pol)
             pool = _held_out(policy, from_dataset)
             results = _from_dataset(world, from_dataset, episodes, goal_offset, budget, seed, pool)
             title = f"{env}: {episodes} starts from {from_dataset} (goal +{goal_offset} steps, budget {budget})"
-            record.update(protocol="dataset", dataset=from_dataset, goal_offset=goal_offset, budget=budget,
-                          episodes_idx=results["episodes_idx"], start_steps=results["start_steps"], held_out=pool is not None)
+            record.update(
+                protocol="dataset",
+                dataset=from_dataset,
+                goal_offset=goal_offset,
+                budget=budget,
+                episodes_idx=results["episodes_idx"],
+                start_steps=results["start_steps"],
+                held_out=pool is not None,
+            )
         else:
             results = evaluate_policy(world, policy, episodes, seed, variation, plan=plan, device=device)
             title = f"{env}: seeds {seed}..{seed + episodes - 1}, at most {max_steps} steps"
-            record.update(protocol="seeds", seeds=[seed, seed + episodes - 1], max_steps=max_steps, variation=list(variation))
+            record.update(
+                protocol="seeds", seeds=[seed, seed + episodes - 1], max_steps=max_steps, variation=list(variation)
+            )
         if video is not None:
             run = checkpoint_run(policy)
             if run is not None and policy.startswith("wm:"):
@@ -110,8 +171,11 @@ def _finish(policy: str, results: dict, record: dict[str, Any], plan: Any, start
     """The summary of ``results``; fills the outcome fields of ``record``."""
     summary = SuccessSummary.from_results(policy, results)
     record.update(
-        success_rate=round(100 * summary.rate, 2), ci95=[round(100 * v, 2) for v in summary.interval],
-        successes=summary.successes, mean_length=round(summary.mean_length, 2), seconds=round(time.perf_counter() - start, 1),
+        success_rate=round(100 * summary.rate, 2),
+        ci95=[round(100 * v, 2) for v in summary.interval],
+        successes=summary.successes,
+        mean_length=round(summary.mean_length, 2),
+        seconds=round(time.perf_counter() - start, 1),
         episode_successes=[bool(v) for v in results["episode_successes"]],
     )
     if plan is not None:

@@ -10,30 +10,71 @@ import typer
 from ..solver import list_solvers
 from .errors import int_in, output_dir, output_file, require
 
-EnvArg = Annotated[str, typer.Argument(help="Environment id, e.g. swm/TwoRoom-v2 (see `swm envs`).", metavar="ENV", show_default=False)]
+EnvArg = Annotated[
+    str, typer.Argument(help="Environment id, e.g. swm/TwoRoom-v2 (see `swm envs`).", metavar="ENV", show_default=False)
+]
 PolicyOpt = Annotated[str, typer.Option("--policy", "-p", metavar="POLICY", help="Policy that acts: random or expert.")]
-NumEnvsOpt = Annotated[int, typer.Option("--num-envs", parser=int_in(1), metavar="K", help="Environments stepped together.")]
-ImageSizeOpt = Annotated[int, typer.Option("--image-size", parser=int_in(8, 1024), metavar="S", help="Side of the square images (pixels).")]
+NumEnvsOpt = Annotated[
+    int, typer.Option("--num-envs", parser=int_in(1), metavar="K", help="Environments stepped together.")
+]
+ImageSizeOpt = Annotated[
+    int, typer.Option("--image-size", parser=int_in(8, 1024), metavar="S", help="Side of the square images (pixels).")
+]
 SeedOpt = Annotated[int, typer.Option("--seed", parser=int_in(0), metavar="SEED", help="Episode k uses seed SEED + k.")]
 MaxStepsOpt = Annotated[
     int | None,
-    typer.Option("--max-steps", parser=int_in(1), metavar="M", help="Steps before an episode is cut (default: the env's registered limit).", show_default=False),
+    typer.Option(
+        "--max-steps",
+        parser=int_in(1),
+        metavar="M",
+        help="Steps before an episode is cut (default: the env's registered limit).",
+        show_default=False,
+    ),
 ]
 VariationOpt = Annotated[
     list[str] | None,
-    typer.Option("--variation", metavar="KEY", help="Factor of variation to resample every episode (repeatable; 'all' for every factor; see `swm fovs ENV`)."),
+    typer.Option(
+        "--variation",
+        metavar="KEY",
+        help="Factor of variation to resample every episode (repeatable; 'all' for every factor; see `swm fovs ENV`).",
+    ),
 ]
 
 
 EvalImageSizeOpt = Annotated[
     int | None,
-    typer.Option("--image-size", parser=int_in(8, 1024), metavar="S", help="Side of the square images (pixels; default: what a wm:/gc: run was trained on, else 64).", show_default=False),
+    typer.Option(
+        "--image-size",
+        parser=int_in(8, 1024),
+        metavar="S",
+        help="Side of the square images (pixels; default: what a wm:/gc: run was trained on, else 64).",
+        show_default=False,
+    ),
 ]
-ForceOpt = Annotated[bool, typer.Option("--force", help="Evaluate a wm:/gc: run on an env or image size other than its own without a word (no warning, no error).")]
+ForceOpt = Annotated[
+    bool,
+    typer.Option(
+        "--force",
+        help="Evaluate a wm:/gc: run on an env or image size other than its own without a word (no warning, no error).",
+    ),
+]
 
 
-RayOpt = Annotated[bool, typer.Option("--ray", help="Spread the episodes over Ray tasks (a private local Ray on this machine unless --ray-address).")]
-RayAddressOpt = Annotated[str | None, typer.Option("--ray-address", metavar="ADDRESS", help="Ray cluster to use (HOST:PORT or 'auto'); implies --ray.", show_default=False)]
+RayOpt = Annotated[
+    bool,
+    typer.Option(
+        "--ray", help="Spread the episodes over Ray tasks (a private local Ray on this machine unless --ray-address)."
+    ),
+]
+RayAddressOpt = Annotated[
+    str | None,
+    typer.Option(
+        "--ray-address",
+        metavar="ADDRESS",
+        help="Ray cluster to use (HOST:PORT or 'auto'); implies --ray.",
+        show_default=False,
+    ),
+]
 
 
 def default_dataset_name(env_id: str, policy: str) -> str:
@@ -43,16 +84,39 @@ def default_dataset_name(env_id: str, policy: str) -> str:
 
 def collect(
     env: EnvArg,
-    episodes: Annotated[int, typer.Option("--episodes", "-n", parser=int_in(1), metavar="N", help="Episodes the dataset holds when done (an existing one is resumed up to N).")] = 10,
+    episodes: Annotated[
+        int,
+        typer.Option(
+            "--episodes",
+            "-n",
+            parser=int_in(1),
+            metavar="N",
+            help="Episodes the dataset holds when done (an existing one is resumed up to N).",
+        ),
+    ] = 10,
     policy: PolicyOpt = "random",
-    name: Annotated[str | None, typer.Option("--name", metavar="NAME", help="Dataset name (default: <env>-<policy>).", show_default=False)] = None,
+    name: Annotated[
+        str | None,
+        typer.Option("--name", metavar="NAME", help="Dataset name (default: <env>-<policy>).", show_default=False),
+    ] = None,
     num_envs: NumEnvsOpt = 1,
     image_size: ImageSizeOpt = 64,
     seed: SeedOpt = 0,
     variation: VariationOpt = None,
     max_steps: MaxStepsOpt = None,
-    overwrite: Annotated[bool, typer.Option("--overwrite", help="Replace an existing dataset of that name instead of resuming it.")] = False,
-    noise: Annotated[float | None, typer.Option("--noise", min=0.0, metavar="SIGMA", help="Std of the Gaussian noise on the expert's actions (default: 1.0 times the action bound for experts that take noise, so the data shows what varied actions do; 0 records clean demonstrations).", show_default=False)] = None,
+    overwrite: Annotated[
+        bool, typer.Option("--overwrite", help="Replace an existing dataset of that name instead of resuming it.")
+    ] = False,
+    noise: Annotated[
+        float | None,
+        typer.Option(
+            "--noise",
+            min=0.0,
+            metavar="SIGMA",
+            help="Std of the Gaussian noise on the expert's actions (default: 1.0 times the action bound for experts that take noise, so the data shows what varied actions do; 0 records clean demonstrations).",
+            show_default=False,
+        ),
+    ] = None,
     ray: RayOpt = False,
     ray_address: RayAddressOpt = None,
 ) -> None:
@@ -65,7 +129,15 @@ def collect(
     from ..data._index import not_a_file
     from ..data.utils import dataset_file
     from .display import console, display_dataset_info
-    from .worlds import check_factors, check_policy, make_policy, make_world, recording_noise, reset_options, resolve_env
+    from .worlds import (
+        check_factors,
+        check_policy,
+        make_policy,
+        make_world,
+        recording_noise,
+        reset_options,
+        resolve_env,
+    )
 
     env = resolve_env(env)
     policy = check_policy(policy)
@@ -76,7 +148,20 @@ def collect(
     require(what is None, f"swm collect requires {str(path)!r} to be a dataset file, got {what}; pick another --name")
     out = console()
     if ray or ray_address:
-        _collect_on_ray(env, name, episodes, policy, noise, seed, image_size, max_steps, variation or [], overwrite, num_envs, ray_address)
+        _collect_on_ray(
+            env,
+            name,
+            episodes,
+            policy,
+            noise,
+            seed,
+            image_size,
+            max_steps,
+            variation or [],
+            overwrite,
+            num_envs,
+            ray_address,
+        )
         return
     have = 0
     if path.exists():
@@ -85,7 +170,9 @@ def collect(
         else:
             have = dataset_info(name)["num_episodes"]
             todo = f"recording {episodes - have} more to reach {episodes}" if have < episodes else "nothing to record"
-            out.print(f"Dataset [bold]{name}[/] holds {have} episodes: {todo} (--overwrite replaces it).", soft_wrap=True)
+            out.print(
+                f"Dataset [bold]{name}[/] holds {have} episodes: {todo} (--overwrite replaces it).", soft_wrap=True
+            )
     with make_world(env, num_envs=num_envs, image_size=image_size, max_steps=max_steps, seed=seed) as world:
         options = reset_options(check_factors(world, variation or []))
         world.set_policy(make_policy(policy, env, seed=seed, noise=noise))
@@ -95,8 +182,20 @@ def collect(
     out.print(f"Recorded {max(episodes - have, 0)} {policy} episodes{how} of {env} to {path}", soft_wrap=True)
 
 
-def _collect_on_ray(env: str, name: str, episodes: int, policy: str, noise: float | None, seed: int, image_size: int,
-                    max_steps: int | None, variation: list[str], overwrite: bool, num_envs: int, address: str | None) -> None:
+def _collect_on_ray(
+    env: str,
+    name: str,
+    episodes: int,
+    policy: str,
+    noise: float | None,
+    seed: int,
+    image_size: int,
+    max_steps: int | None,
+    variation: list[str],
+    overwrite: bool,
+    num_envs: int,
+    address: str | None,
+) -> None:
     """``swm collect --ray``: a sharded dataset recorded by Ray tasks (:mod:`stable_worldmodel.world.on_ray`)."""
     import sys
 
@@ -106,45 +205,183 @@ def _collect_on_ray(env: str, name: str, episodes: int, policy: str, noise: floa
     from .worlds import check_factors, episode_limit, make_world, reset_options
 
     if num_envs != 1:
-        raise typer.BadParameter("each Ray task runs one env: drop --num-envs (--ray spreads the episodes over tasks)", param_hint="--num-envs")
+        raise typer.BadParameter(
+            "each Ray task runs one env: drop --num-envs (--ray spreads the episodes over tasks)",
+            param_hint="--num-envs",
+        )
     if overwrite and name in list_datasets():
         delete_dataset(name)
     with make_world(env, num_envs=1, image_size=16, max_steps=1, verbose=0) as world:  # checks the factor names
         options = reset_options(check_factors(world, variation))
-    folder = record_dataset_on_ray(env, name, episodes, seed=seed, policy=policy, noise=noise, image_size=image_size,
-                                   max_steps=episode_limit(env, max_steps), options=options, address=address,
-                                   progress=sys.stderr.isatty())
+    folder = record_dataset_on_ray(
+        env,
+        name,
+        episodes,
+        seed=seed,
+        policy=policy,
+        noise=noise,
+        image_size=image_size,
+        max_steps=episode_limit(env, max_steps),
+        options=options,
+        address=address,
+        progress=sys.stderr.isatty(),
+    )
     display_dataset_info(dataset_info(name))
-    console().print(f"Recorded {episodes} {policy} episodes of {env} on Ray to {folder}/ (shards read as one dataset)", soft_wrap=True)
+    console().print(
+        f"Recorded {episodes} {policy} episodes of {env} on Ray to {folder}/ (shards read as one dataset)",
+        soft_wrap=True,
+    )
 
 
 def eval_cmd(
     env: EnvArg,
-    policy: Annotated[str, typer.Option("--policy", "-p", metavar="POLICY", help="random, expert, wm:RUN (plan with checkpoint RUN, see `swm list model`) or gc:RUN (act with the goal-conditioned policy RUN: gcbc, gcivl, gciql). With --fov-sweep, several: P1,P2.")] = "random",
-    episodes: Annotated[int, typer.Option("--episodes", "-n", parser=int_in(1), metavar="N", help="Episodes to evaluate.")] = 20,
+    policy: Annotated[
+        str,
+        typer.Option(
+            "--policy",
+            "-p",
+            metavar="POLICY",
+            help="random, expert, wm:RUN (plan with checkpoint RUN, see `swm list model`) or gc:RUN (act with the goal-conditioned policy RUN: gcbc, gcivl, gciql). With --fov-sweep, several: P1,P2.",
+        ),
+    ] = "random",
+    episodes: Annotated[
+        int, typer.Option("--episodes", "-n", parser=int_in(1), metavar="N", help="Episodes to evaluate.")
+    ] = 20,
     seed: SeedOpt = 0,
     variation: VariationOpt = None,
-    video: Annotated[Path | None, typer.Option("--video", metavar="DIR", help="Also write one MP4 per env of a rollout into this folder.", file_okay=False)] = None,
+    video: Annotated[
+        Path | None,
+        typer.Option(
+            "--video", metavar="DIR", help="Also write one MP4 per env of a rollout into this folder.", file_okay=False
+        ),
+    ] = None,
     num_envs: NumEnvsOpt = 1,
     max_steps: MaxStepsOpt = None,
     image_size: EvalImageSizeOpt = None,
-    solver: Annotated[str, typer.Option("--solver", metavar="NAME", help=f"Planner of wm: policies: {', '.join(list_solvers())} (swm list solver).")] = "cem",
-    horizon: Annotated[int, typer.Option("--horizon", parser=int_in(1), metavar="H", help="Planned action blocks (wm: policies).")] = 5,
-    receding_horizon: Annotated[int, typer.Option("--receding-horizon", parser=int_in(1), metavar="R", help="Blocks executed before replanning (MPC; at most H).")] = 1,
-    samples: Annotated[int, typer.Option("--samples", parser=int_in(1), metavar="S", help="Candidates per solver iteration.")] = 300,
-    iterations: Annotated[int, typer.Option("--iterations", parser=int_in(1), metavar="K", help="Solver iterations per plan.")] = 30,
-    cost: Annotated[str, typer.Option("--cost", metavar="C", help="auto: min for goal-distance models, the model's own cost for the others (TD-MPC2); min: the predicted step closest to the goal counts (reach it at any step); final: the last one (upstream's).")] = "auto",
-    subgoals: Annotated[str | None, typer.Option("--subgoals", metavar="METHOD", help="wm: policies: graph = plan towards waypoints on a latent graph of the run's training episodes (search on the replay buffer; takes detours the goal distance alone misses); none = plan on the goal alone (plain MPC, as papers report); auto = on the goal alone, and on the graph's waypoints once an episode stops getting closer (LeWM / PLDM / PreJEPA / Dreamer runs whose training dataset is on disk; else none).")] = "auto",
-    lookahead: Annotated[int | None, typer.Option("--lookahead", parser=int_in(1), metavar="L", help="With --subgoals graph or auto: blocks along the graph path to the waypoint (default: H // 2).", show_default=False)] = None,
-    patience: Annotated[int | None, typer.Option("--patience", parser=int_in(1), metavar="STEPS", help="With --subgoals auto: env steps without progress towards the goal before an episode aims at waypoints (default: H x the action block // 2, at least 10).", show_default=False)] = None,
-    device: Annotated[str, typer.Option("--device", metavar="DEV", help="Where wm: policies plan: auto, cpu, cuda, mps.")] = "auto",
-    json_path: Annotated[Path | None, typer.Option("--json", metavar="FILE", help="Write success rate, 95% CI, episodes, seeds and the protocol as JSON.", dir_okay=False)] = None,
-    from_dataset: Annotated[str | None, typer.Option("--from-dataset", metavar="NAME", help="Start from held-out episodes of this dataset (upstream's protocol).", show_default=False)] = None,
-    goal_offset: Annotated[int, typer.Option("--goal-offset", parser=int_in(1), metavar="G", help="With --from-dataset: the goal is the state G steps later.")] = 25,
-    budget: Annotated[int, typer.Option("--budget", parser=int_in(1), metavar="N", help="With --from-dataset: steps allowed to reach the goal.")] = 50,
-    decoder: Annotated[str | None, typer.Option("--decoder", metavar="RUN", help="With --video and wm:RUN: the frame decoder that shows what the model predicts (default: RUN-frame when it exists).", show_default=False)] = None,
-    fov_sweep: Annotated[str | None, typer.Option("--fov-sweep", metavar="FACTORS", help="Generalization report: evaluate in distribution, with each factor (all: every factor group; or F1,F2) resampled, and with all resampled, on the same seeds; a table, a heatmap PNG (beside --json, or --plot) and the JSON.", show_default=False)] = None,
-    plot: Annotated[Path | None, typer.Option("--plot", metavar="FILE", help="With --fov-sweep: where the heatmap PNG goes (default: beside --json, else fov-sweep-ENV.png).", dir_okay=False, show_default=False)] = None,
+    solver: Annotated[
+        str,
+        typer.Option(
+            "--solver", metavar="NAME", help=f"Planner of wm: policies: {', '.join(list_solvers())} (swm list solver)."
+        ),
+    ] = "cem",
+    horizon: Annotated[
+        int, typer.Option("--horizon", parser=int_in(1), metavar="H", help="Planned action blocks (wm: policies).")
+    ] = 5,
+    receding_horizon: Annotated[
+        int,
+        typer.Option(
+            "--receding-horizon",
+            parser=int_in(1),
+            metavar="R",
+            help="Blocks executed before replanning (MPC; at most H).",
+        ),
+    ] = 1,
+    samples: Annotated[
+        int, typer.Option("--samples", parser=int_in(1), metavar="S", help="Candidates per solver iteration.")
+    ] = 300,
+    iterations: Annotated[
+        int, typer.Option("--iterations", parser=int_in(1), metavar="K", help="Solver iterations per plan.")
+    ] = 30,
+    cost: Annotated[
+        str,
+        typer.Option(
+            "--cost",
+            metavar="C",
+            help="auto: min for goal-distance models, the model's own cost for the others (TD-MPC2); min: the predicted step closest to the goal counts (reach it at any step); final: the last one (upstream's).",
+        ),
+    ] = "auto",
+    subgoals: Annotated[
+        str | None,
+        typer.Option(
+            "--subgoals",
+            metavar="METHOD",
+            help="wm: policies: graph = plan towards waypoints on a latent graph of the run's training episodes (search on the replay buffer; takes detours the goal distance alone misses); none = plan on the goal alone (plain MPC, as papers report); auto = on the goal alone, and on the graph's waypoints once an episode stops getting closer (LeWM / PLDM / PreJEPA / Dreamer runs whose training dataset is on disk; else none).",
+        ),
+    ] = "auto",
+    lookahead: Annotated[
+        int | None,
+        typer.Option(
+            "--lookahead",
+            parser=int_in(1),
+            metavar="L",
+            help="With --subgoals graph or auto: blocks along the graph path to the waypoint (default: H // 2).",
+            show_default=False,
+        ),
+    ] = None,
+    patience: Annotated[
+        int | None,
+        typer.Option(
+            "--patience",
+            parser=int_in(1),
+            metavar="STEPS",
+            help="With --subgoals auto: env steps without progress towards the goal before an episode aims at waypoints (default: H x the action block // 2, at least 10).",
+            show_default=False,
+        ),
+    ] = None,
+    device: Annotated[
+        str, typer.Option("--device", metavar="DEV", help="Where wm: policies plan: auto, cpu, cuda, mps.")
+    ] = "auto",
+    json_path: Annotated[
+        Path | None,
+        typer.Option(
+            "--json",
+            metavar="FILE",
+            help="Write success rate, 95% CI, episodes, seeds and the protocol as JSON.",
+            dir_okay=False,
+        ),
+    ] = None,
+    from_dataset: Annotated[
+        str | None,
+        typer.Option(
+            "--from-dataset",
+            metavar="NAME",
+            help="Start from held-out episodes of this dataset (upstream's protocol).",
+            show_default=False,
+        ),
+    ] = None,
+    goal_offset: Annotated[
+        int,
+        typer.Option(
+            "--goal-offset",
+            parser=int_in(1),
+            metavar="G",
+            help="With --from-dataset: the goal is the state G steps later.",
+        ),
+    ] = 25,
+    budget: Annotated[
+        int,
+        typer.Option(
+            "--budget", parser=int_in(1), metavar="N", help="With --from-dataset: steps allowed to reach the goal."
+        ),
+    ] = 50,
+    decoder: Annotated[
+        str | None,
+        typer.Option(
+            "--decoder",
+            metavar="RUN",
+            help="With --video and wm:RUN: the frame decoder that shows what the model predicts (default: RUN-frame when it exists).",
+            show_default=False,
+        ),
+    ] = None,
+    fov_sweep: Annotated[
+        str | None,
+        typer.Option(
+            "--fov-sweep",
+            metavar="FACTORS",
+            help="Generalization report: evaluate in distribution, with each factor (all: every factor group; or F1,F2) resampled, and with all resampled, on the same seeds; a table, a heatmap PNG (beside --json, or --plot) and the JSON.",
+            show_default=False,
+        ),
+    ] = None,
+    plot: Annotated[
+        Path | None,
+        typer.Option(
+            "--plot",
+            metavar="FILE",
+            help="With --fov-sweep: where the heatmap PNG goes (default: beside --json, else fov-sweep-ENV.png).",
+            dir_okay=False,
+            show_default=False,
+        ),
+    ] = None,
     ray: RayOpt = False,
     ray_address: RayAddressOpt = None,
     force: ForceOpt = False,
@@ -161,10 +398,15 @@ def eval_cmd(
 
     env = resolve_env(env)
     if (ray or ray_address) and (video is not None or from_dataset is not None):
-        raise typer.BadParameter("evaluates seeded episodes: it cannot be combined with --video or --from-dataset", param_hint="--ray")
+        raise typer.BadParameter(
+            "evaluates seeded episodes: it cannot be combined with --video or --from-dataset", param_hint="--ray"
+        )
     if fov_sweep is not None:
         if video is not None or from_dataset is not None or variation:
-            raise typer.BadParameter("cannot be combined with --video, --from-dataset or --variation (the sweep sets the factors)", param_hint="--fov-sweep")
+            raise typer.BadParameter(
+                "cannot be combined with --video, --from-dataset or --variation (the sweep sets the factors)",
+                param_hint="--fov-sweep",
+            )
         policies = [check_policy(p.strip()) for p in policy.split(",") if p.strip()]
     else:
         policy = check_policy(policy)
@@ -174,13 +416,25 @@ def eval_cmd(
     if json_path is not None:
         json_path = output_file(json_path, "swm eval --json")
     if decoder is not None and (video is None or not policy.startswith("wm:")):
-        raise typer.BadParameter("requires --video DIR and a wm:RUN policy (it decodes what the model predicts)", param_hint="--decoder")
+        raise typer.BadParameter(
+            "requires --video DIR and a wm:RUN policy (it decodes what the model predicts)", param_hint="--decoder"
+        )
     plan = None
     if any(p.startswith("wm:") for p in checked):
         from ..planning.learned import PlanSettings
 
-        plan = PlanSettings(solver=solver, horizon=horizon, receding_horizon=receding_horizon, samples=samples, iterations=iterations, seed=seed, cost=cost,
-                            subgoals=subgoals, lookahead=lookahead, patience=patience)
+        plan = PlanSettings(
+            solver=solver,
+            horizon=horizon,
+            receding_horizon=receding_horizon,
+            samples=samples,
+            iterations=iterations,
+            seed=seed,
+            cost=cost,
+            subgoals=subgoals,
+            lookahead=lookahead,
+            patience=patience,
+        )
     elif subgoals != "auto" or lookahead is not None or patience is not None:
         raise typer.BadParameter("applies to wm:RUN policies only", param_hint="--subgoals/--lookahead/--patience")
     if image_size is None:
@@ -190,13 +444,41 @@ def eval_cmd(
     max_steps = episode_limit(env, max_steps)
     out = console()
     if fov_sweep is not None:
-        _fov_sweep(env, policies, fov_sweep, json_path, plot, episodes=episodes, seed=seed, num_envs=num_envs, max_steps=max_steps,
-                   image_size=image_size, plan=plan, device=device, ray=ray, ray_address=ray_address)
+        _fov_sweep(
+            env,
+            policies,
+            fov_sweep,
+            json_path,
+            plot,
+            episodes=episodes,
+            seed=seed,
+            num_envs=num_envs,
+            max_steps=max_steps,
+            image_size=image_size,
+            plan=plan,
+            device=device,
+            ray=ray,
+            ray_address=ray_address,
+        )
         return
     summary, title, record = evaluate_cli(
-        env, policy, episodes=episodes, seed=seed, variation=variation or [], num_envs=num_envs, max_steps=max_steps,
-        image_size=image_size, plan=plan, device=device, from_dataset=from_dataset, goal_offset=goal_offset, budget=budget,
-        video=video, decoder=decoder, ray=ray, ray_address=ray_address,
+        env,
+        policy,
+        episodes=episodes,
+        seed=seed,
+        variation=variation or [],
+        num_envs=num_envs,
+        max_steps=max_steps,
+        image_size=image_size,
+        plan=plan,
+        device=device,
+        from_dataset=from_dataset,
+        goal_offset=goal_offset,
+        budget=budget,
+        video=video,
+        decoder=decoder,
+        ray=ray,
+        ray_address=ray_address,
     )
     out.print(success_table(title, [summary]))
     if record.get("videos"):
@@ -223,7 +505,11 @@ def _factor_count(env_id: str) -> str:
     return str(len(space.names())) if space is not None else "0"
 
 
-def envs(tag: Annotated[str | None, typer.Option("--tag", metavar="TAG", help="Only environments with this tag (e.g. paper, discrete).")] = None) -> None:
+def envs(
+    tag: Annotated[
+        str | None, typer.Option("--tag", metavar="TAG", help="Only environments with this tag (e.g. paper, discrete).")
+    ] = None,
+) -> None:
     """List the registered environments with their number of factors of variation and tags.
 
     Example: swm envs --tag paper
@@ -245,7 +531,9 @@ def envs(tag: Annotated[str | None, typer.Option("--tag", metavar="TAG", help="O
     console().print(table)
 
 
-def _fov_sweep(env: str, policies: list[str], factors: str, json_path: Path | None, plot: Path | None, *, plan: Any, **kwargs: Any) -> None:
+def _fov_sweep(
+    env: str, policies: list[str], factors: str, json_path: Path | None, plot: Path | None, *, plan: Any, **kwargs: Any
+) -> None:
     """``swm eval --fov-sweep``: the generalization report (:mod:`.sweep`)."""
     import json
 
@@ -259,7 +547,9 @@ def _fov_sweep(env: str, policies: list[str], factors: str, json_path: Path | No
     report = run_sweep(env, policies, factors, evaluate=evaluate, **kwargs)
     out = console()
     out.print(sweep_table(report))
-    png = plot or (json_path.with_suffix(".png") if json_path is not None else Path(f"fov-sweep-{env.split('/')[-1]}.png"))
+    png = plot or (
+        json_path.with_suffix(".png") if json_path is not None else Path(f"fov-sweep-{env.split('/')[-1]}.png")
+    )
     out.print(f"Heatmap: {sweep_heatmap(report, png)}", soft_wrap=True)
     if json_path is not None:
         protocol = {k: v for k, v in kwargs.items()}
@@ -270,9 +560,30 @@ def _fov_sweep(env: str, policies: list[str], factors: str, json_path: Path | No
 
 
 def sweep(
-    file: Annotated[Path, typer.Argument(help="YAML: envs, policies, factors (none, a factor or group, all, or a list resampled together), episodes, seed, num_envs, max_steps, image_size, device, plan.", metavar="FILE", exists=True, dir_okay=False, show_default=False)],
-    json_path: Annotated[Path | None, typer.Option("--json", metavar="FILE", help="Write every result and the protocol as JSON.", dir_okay=False)] = None,
-    plot: Annotated[Path | None, typer.Option("--plot", metavar="DIR", help="Write one heatmap PNG per env into DIR (default: beside --json).", file_okay=False, show_default=False)] = None,
+    file: Annotated[
+        Path,
+        typer.Argument(
+            help="YAML: envs, policies, factors (none, a factor or group, all, or a list resampled together), episodes, seed, num_envs, max_steps, image_size, device, plan.",
+            metavar="FILE",
+            exists=True,
+            dir_okay=False,
+            show_default=False,
+        ),
+    ],
+    json_path: Annotated[
+        Path | None,
+        typer.Option("--json", metavar="FILE", help="Write every result and the protocol as JSON.", dir_okay=False),
+    ] = None,
+    plot: Annotated[
+        Path | None,
+        typer.Option(
+            "--plot",
+            metavar="DIR",
+            help="Write one heatmap PNG per env into DIR (default: beside --json).",
+            file_okay=False,
+            show_default=False,
+        ),
+    ] = None,
     ray: RayOpt = False,
     ray_address: RayAddressOpt = None,
     force: ForceOpt = False,
@@ -297,7 +608,11 @@ def sweep(
     for env in spec["envs"]:  # once per env and run, before any World starts
         for policy in spec["policies"]:
             check_run_fits(policy, resolve_env(env), spec["image_size"], force=force, image_option="image_size: ")
-    plan = PlanSettings(**{"seed": spec["seed"], **spec["plan"]}) if any(p.startswith("wm:") for p in spec["policies"]) else None
+    plan = (
+        PlanSettings(**{"seed": spec["seed"], **spec["plan"]})
+        if any(p.startswith("wm:") for p in spec["policies"])
+        else None
+    )
     if json_path is not None:
         json_path = output_file(json_path, "swm sweep --json")
     reports = run_sweep_file(spec, evaluate=evaluate_cli, plan=plan, ray=ray, ray_address=ray_address)

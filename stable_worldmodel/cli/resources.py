@@ -113,7 +113,9 @@ def checkpoint_info(name: str, folder: Path) -> dict[str, Any]:
     try:
         config = json.loads((folder / CONFIG_NAME).read_text())
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"swm show model requires valid JSON in {folder / CONFIG_NAME}, got a corrupt file ({exc})") from exc
+        raise ConfigError(
+            f"swm show model requires valid JSON in {folder / CONFIG_NAME}, got a corrupt file ({exc})"
+        ) from exc
     weights = folder / WEIGHTS_NAME
     if not weights.is_file():
         weights = sorted(folder.glob("*.pt"))[0]
@@ -223,7 +225,11 @@ def _list_solvers() -> None:
     console().print(table)
 
 
-def list_cmd(kind: Annotated[str, typer.Argument(help="What to list: model, dataset, world or solver.", metavar="KIND", show_default=False)]) -> None:
+def list_cmd(
+    kind: Annotated[
+        str, typer.Argument(help="What to list: model, dataset, world or solver.", metavar="KIND", show_default=False)
+    ],
+) -> None:
     """List cached models or datasets, the registered worlds, or the planning solvers.
 
     Example: swm list dataset
@@ -242,8 +248,11 @@ def list_cmd(kind: Annotated[str, typer.Argument(help="What to list: model, data
         from ..wm import list_models
         from .display import console
 
-        console().print(f"[bold]Model types[/] (swm train MODEL; swm show model MODEL for presets and fields): "
-                        f"{', '.join(list_models())}", soft_wrap=True)
+        console().print(
+            f"[bold]Model types[/] (swm train MODEL; swm show model MODEL for presets and fields): "
+            f"{', '.join(list_models())}",
+            soft_wrap=True,
+        )
     if kind == "dataset":
         from ..data.info import leftover_partials
         from .display import console
@@ -253,9 +262,16 @@ def list_cmd(kind: Annotated[str, typer.Argument(help="What to list: model, data
 
 
 def show(
-    kind: Annotated[str, typer.Argument(help="What to show: model, dataset or world.", metavar="KIND", show_default=False)],
-    names: Annotated[list[str] | None, typer.Argument(help="Names to show (see `swm list KIND`).", metavar="NAMES...", show_default=False)] = None,
-    all: Annotated[bool, typer.Option("--all", "-a", help="Show every cached model / dataset / registered world.")] = False,  # noqa: A002 (seed name)
+    kind: Annotated[
+        str, typer.Argument(help="What to show: model, dataset or world.", metavar="KIND", show_default=False)
+    ],
+    names: Annotated[
+        list[str] | None,
+        typer.Argument(help="Names to show (see `swm list KIND`).", metavar="NAMES...", show_default=False),
+    ] = None,
+    all: Annotated[
+        bool, typer.Option("--all", "-a", help="Show every cached model / dataset / registered world.")
+    ] = False,  # noqa: A002 (seed name)
 ) -> None:
     """Show the files, model class, parameter count and training protocol of models (the presets
     and config fields of a model type), the columns, counts, shapes and factors of datasets, or
@@ -292,7 +308,9 @@ def show(
 
 def delete(
     kind: Annotated[str, typer.Argument(help="What to delete: model or dataset.", metavar="KIND", show_default=False)],
-    names: Annotated[list[str], typer.Argument(help="Names to delete (all must exist).", metavar="NAMES...", show_default=False)],
+    names: Annotated[
+        list[str], typer.Argument(help="Names to delete (all must exist).", metavar="NAMES...", show_default=False)
+    ],
     yes: Annotated[bool, typer.Option("--yes", "-y", help="Do not ask for confirmation.")] = False,
 ) -> None:
     """Delete cached models (checkpoint folders or pickled files) or datasets, after a confirmation
@@ -323,13 +341,19 @@ def datasets_cmd() -> None:
     list_cmd("dataset")
 
 
-def inspect_cmd(name: Annotated[str, typer.Argument(help="Dataset name to inspect (see `swm datasets`).", metavar="NAME", show_default=False)]) -> None:
+def inspect_cmd(
+    name: Annotated[
+        str, typer.Argument(help="Dataset name to inspect (see `swm datasets`).", metavar="NAME", show_default=False)
+    ],
+) -> None:
     """Show a dataset's columns, counts, shapes and factors (upstream 0.1.1's name for `swm show dataset`)."""
     show("dataset", [name])
 
 
 def checkpoints_cmd(
-    filter: Annotated[str | None, typer.Argument(help="Only names containing this text.", metavar="FILTER", show_default=False)] = None,  # noqa: A002
+    filter: Annotated[
+        str | None, typer.Argument(help="Only names containing this text.", metavar="FILTER", show_default=False)
+    ] = None,  # noqa: A002
 ) -> None:
     """List the model checkpoints in the cache, optionally filtered (upstream 0.1.1's `swm checkpoints`)."""
     from ..data import get_cache_dir

@@ -33,7 +33,14 @@ class SWMGroup(TyperGroup):
     (a bad command line). Exceptions that are not user errors propagate with their traceback.
     """
 
-    def main(self, args: Sequence[str] | None = None, prog_name: str | None = None, complete_var: str | None = None, standalone_mode: bool = True, **extra: Any) -> Any:
+    def main(
+        self,
+        args: Sequence[str] | None = None,
+        prog_name: str | None = None,
+        complete_var: str | None = None,
+        standalone_mode: bool = True,
+        **extra: Any,
+    ) -> Any:
         try:
             rv = super().main(args=args, prog_name=prog_name, complete_var=complete_var, standalone_mode=False, **extra)
             code = rv if isinstance(rv, int) and not isinstance(rv, bool) else 0
@@ -106,9 +113,12 @@ def _print_version(value: bool) -> None:
 @app.callback()
 def common(
     version: Annotated[
-        bool | None, typer.Option("--version", "-V", callback=_print_version, is_eager=True, help="Print the version and exit.")
+        bool | None,
+        typer.Option("--version", "-V", callback=_print_version, is_eager=True, help="Print the version and exit."),
     ] = None,
-    verbose: Annotated[int, typer.Option("--verbose", "-v", count=True, help="More log messages (-v info, -vv debug).")] = 0,
+    verbose: Annotated[
+        int, typer.Option("--verbose", "-v", count=True, help="More log messages (-v info, -vv debug).")
+    ] = 0,
 ) -> None:
     """Common options for all stable-worldmodel commands."""
     setup_logging(verbose)
@@ -147,4 +157,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     or other jobs share the cores, a planning step ran 10x slower on a loaded 2-core machine.
     """
     os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
-    return typer.main.get_command(app).main(args=list(argv) if argv is not None else None, prog_name="swm", standalone_mode=False)
+    return typer.main.get_command(app).main(
+        args=list(argv) if argv is not None else None, prog_name="swm", standalone_mode=False
+    )

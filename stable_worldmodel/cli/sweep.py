@@ -69,7 +69,12 @@ def run_sweep(env: str, policies: Sequence[str], factors: str, *, evaluate: Any,
     returned report holds the settings, the policies and, per policy, a row per setting.
     """
     settings = sweep_settings(env, factors)
-    report: dict[str, Any] = {"env": env, "policies": list(policies), "settings": [s for s, _ in settings], "results": {}}
+    report: dict[str, Any] = {
+        "env": env,
+        "policies": list(policies),
+        "settings": [s for s, _ in settings],
+        "results": {},
+    }
     for policy in policies:
         rows = []
         for label, variation in settings:
@@ -105,7 +110,8 @@ def sweep_json(report: dict[str, Any], protocol: dict[str, Any]) -> dict[str, An
         base = rows[0]["summary"].rate
         out["results"][policy] = [
             {
-                "setting": r["setting"], "variation": r["variation"],
+                "setting": r["setting"],
+                "variation": r["variation"],
                 "success_rate": round(100 * r["summary"].rate, 2),
                 "ci95": [round(100 * v, 2) for v in r["summary"].interval],
                 "drop": round(100 * (r["summary"].rate - base), 2),
@@ -133,7 +139,14 @@ def sweep_heatmap(report: dict[str, Any], path: Path) -> Path:
     for i in range(len(settings)):
         for j, policy in enumerate(policies):
             low, high = report["results"][policy][i]["summary"].interval
-            ax.text(j, i, f"{100 * rates[i, j]:.0f}%\n[{100 * low:.0f}, {100 * high:.0f}]", ha="center", va="center", fontsize=7)
+            ax.text(
+                j,
+                i,
+                f"{100 * rates[i, j]:.0f}%\n[{100 * low:.0f}, {100 * high:.0f}]",
+                ha="center",
+                va="center",
+                fontsize=7,
+            )
     fig.colorbar(im, ax=ax, label="success rate (%)")
     ax.set_title(f"{report['env']}: generalization across factors of variation", fontsize=9)
     fig.tight_layout()
@@ -146,8 +159,16 @@ def sweep_heatmap(report: dict[str, Any], path: Path) -> Path:
 # -- sweeps from a YAML file: envs x policies x factor settings ----------------------------------
 #: keys of a sweep file and their defaults (``envs`` and ``policies`` are required)
 SWEEP_KEYS = {
-    "envs": None, "policies": None, "factors": ["none"], "episodes": 20, "seed": 0, "num_envs": 1,
-    "max_steps": None, "image_size": None, "device": "auto", "plan": {},
+    "envs": None,
+    "policies": None,
+    "factors": ["none"],
+    "episodes": 20,
+    "seed": 0,
+    "num_envs": 1,
+    "max_steps": None,
+    "image_size": None,
+    "device": "auto",
+    "plan": {},
 }
 
 
@@ -167,10 +188,14 @@ def load_sweep_file(path: Path) -> dict[str, Any]:
     except (OSError, yaml.YAMLError) as exc:
         raise ConfigError(f"swm sweep requires a readable YAML file, got {str(path)!r}: {exc}") from exc
     if not isinstance(spec, dict):
-        raise ConfigError(f"swm sweep requires a YAML mapping with keys {', '.join(SWEEP_KEYS)}, got {type(spec).__name__}")
+        raise ConfigError(
+            f"swm sweep requires a YAML mapping with keys {', '.join(SWEEP_KEYS)}, got {type(spec).__name__}"
+        )
     for key in spec:
         if key not in SWEEP_KEYS:
-            raise ConfigError(f"swm sweep file has an unknown key {key!r}.{did_you_mean(key, SWEEP_KEYS)} Keys: {', '.join(SWEEP_KEYS)}")
+            raise ConfigError(
+                f"swm sweep file has an unknown key {key!r}.{did_you_mean(key, SWEEP_KEYS)} Keys: {', '.join(SWEEP_KEYS)}"
+            )
     out = {k: spec.get(k, v) for k, v in SWEEP_KEYS.items()}
     for key in ("envs", "policies", "factors"):
         value = out[key]
@@ -182,9 +207,13 @@ def load_sweep_file(path: Path) -> dict[str, Any]:
         if key == "image_size" and out[key] is None:  # what the first wm:/gc: run was trained on, else 64
             continue
         if isinstance(out[key], bool) or not isinstance(out[key], int) or out[key] < (0 if key == "seed" else 1):
-            raise ConfigError(f"swm sweep requires {key!r} to be an integer >= {0 if key == 'seed' else 1}, got {out[key]!r}")
+            raise ConfigError(
+                f"swm sweep requires {key!r} to be an integer >= {0 if key == 'seed' else 1}, got {out[key]!r}"
+            )
     if not isinstance(out["plan"], dict):
-        raise ConfigError(f"swm sweep requires 'plan' to be a mapping of planner settings (solver, horizon, ...), got {out['plan']!r}")
+        raise ConfigError(
+            f"swm sweep requires 'plan' to be a mapping of planner settings (solver, horizon, ...), got {out['plan']!r}"
+        )
     return out
 
 
@@ -207,15 +236,30 @@ def run_sweep_file(spec: dict[str, Any], *, evaluate: Any, plan: Any, **kwargs: 
         space = variation_space_of(env)
         for _, variation in settings:
             check_factor_names(env, space, variation, extra=["none"])
-        report: dict[str, Any] = {"env": env, "policies": list(spec["policies"]), "settings": [s for s, _ in settings], "results": {}}
+        report: dict[str, Any] = {
+            "env": env,
+            "policies": list(spec["policies"]),
+            "settings": [s for s, _ in settings],
+            "results": {},
+        }
         for policy in spec["policies"]:
             report["results"][policy] = []
             for label, variation in settings:
                 summary, _, record = evaluate(
-                    env, policy, variation=variation, episodes=spec["episodes"], seed=spec["seed"], num_envs=spec["num_envs"],
-                    max_steps=episode_limit(env, spec["max_steps"]), image_size=spec["image_size"], device=spec["device"],
-                    plan=plan if policy.startswith("wm:") else None, **kwargs,
+                    env,
+                    policy,
+                    variation=variation,
+                    episodes=spec["episodes"],
+                    seed=spec["seed"],
+                    num_envs=spec["num_envs"],
+                    max_steps=episode_limit(env, spec["max_steps"]),
+                    image_size=spec["image_size"],
+                    device=spec["device"],
+                    plan=plan if policy.startswith("wm:") else None,
+                    **kwargs,
                 )
-                report["results"][policy].append({"setting": label, "variation": variation, "summary": summary, "record": record})
+                report["results"][policy].append(
+                    {"setting": label, "variation": variation, "summary": summary, "record": record}
+                )
         reports.append(report)
     return reports

@@ -32,14 +32,29 @@ def _config_override(value: str) -> tuple[str, object]:
 
 #: the train() arguments that are also flags of swm train (``--set KEY=VALUE`` routes there): key -> flag
 FLAGS = {
-    "model": "MODEL", "dataset": "--dataset", "preset": "--preset", "steps": "--steps", "epochs": "--epochs",
-    "batch_size": "--batch-size", "lr": "--lr", "device": "--device", "precision": "--precision", "name": "--name",
-    "seed": "--seed", "resume": "--resume", "frameskip": "--frameskip", "source": "--from",
+    "model": "MODEL",
+    "dataset": "--dataset",
+    "preset": "--preset",
+    "steps": "--steps",
+    "epochs": "--epochs",
+    "batch_size": "--batch-size",
+    "lr": "--lr",
+    "device": "--device",
+    "precision": "--precision",
+    "name": "--name",
+    "seed": "--seed",
+    "resume": "--resume",
+    "frameskip": "--frameskip",
+    "source": "--from",
 }
 #: how a ``--set`` value of a flag is checked: what the flag's own parser accepts
 _FLAG_PARSERS = {
-    "steps": int_in(1), "batch_size": int_in(1), "seed": int_in(0), "frameskip": int_in(1),
-    "lr": _float_pos, "epochs": _float_pos,
+    "steps": int_in(1),
+    "batch_size": int_in(1),
+    "seed": int_in(0),
+    "frameskip": int_in(1),
+    "lr": _float_pos,
+    "epochs": _float_pos,
 }
 
 
@@ -49,7 +64,9 @@ def _set_value(key: str, value: object) -> object:
 
     parse = _FLAG_PARSERS.get(key)
     if parse is None:
-        if key in ("model", "dataset", "preset", "device", "precision", "name", "source") and not isinstance(value, str):
+        if key in ("model", "dataset", "preset", "device", "precision", "name", "source") and not isinstance(
+            value, str
+        ):
             raise ConfigError(f"swm train --set {key} requires a name, got {value!r}; or use {FLAGS[key]}")
         if key == "resume" and not isinstance(value, bool):
             raise ConfigError(f"swm train --set resume requires true or false, got {value!r}; or use --resume")
@@ -63,7 +80,9 @@ def _set_value(key: str, value: object) -> object:
         raise ConfigError(f"swm train --set {key} {text}") from None
 
 
-def merge_settings(flags: dict[str, object], given: set[str], settings: dict[str, object]) -> tuple[dict[str, object], dict[str, object]]:
+def merge_settings(
+    flags: dict[str, object], given: set[str], settings: dict[str, object]
+) -> tuple[dict[str, object], dict[str, object]]:
     """``(flags, overrides)``: ``--set`` items of :data:`FLAGS` keys moved into ``flags`` (the same
     place as the flag), the others left as config overrides. A key set by both its flag (in
     ``given``) and ``--set`` must have one value, else :class:`~stable_worldmodel.errors.ConfigError`
@@ -93,21 +112,108 @@ def _given(ctx: typer.Context, param: str) -> bool:
 
 def train_cmd(
     ctx: typer.Context,
-    model: Annotated[str, typer.Argument(help="Model to train: lewm, pldm, prejepa, tdmpc2, dreamer, dummy (world models), gcbc, gcivl, gciql (goal-conditioned policies) or frame (a decoder of another run's latents, with --from RUN).", metavar="MODEL", show_default=False)],
-    dataset: Annotated[str | None, typer.Option("--dataset", "-d", metavar="NAME", help="Dataset in the cache (see `swm list dataset`); a frame decoder defaults to its source run's.", show_default=False)] = None,
-    preset: Annotated[str, typer.Option("--preset", metavar="PRESET", help="Sizes and recipe: tiny (CPU, minutes), small (GPU), paper (upstream's).")] = "tiny",
-    steps: Annotated[int | None, typer.Option("--steps", parser=int_in(1), metavar="N", help="Optimizer steps (default: the preset's).", show_default=False)] = None,
-    epochs: Annotated[float | None, typer.Option("--epochs", parser=_float_pos, metavar="E", help="Passes over the train samples (instead of --steps).", show_default=False)] = None,
-    batch_size: Annotated[int | None, typer.Option("--batch-size", parser=int_in(1), metavar="B", help="Samples per step (default: the preset's).", show_default=False)] = None,
-    lr: Annotated[float | None, typer.Option("--lr", parser=_float_pos, metavar="LR", help="Peak learning rate (default: the preset's).", show_default=False)] = None,
+    model: Annotated[
+        str,
+        typer.Argument(
+            help="Model to train: lewm, pldm, prejepa, tdmpc2, dreamer, dummy (world models), gcbc, gcivl, gciql (goal-conditioned policies) or frame (a decoder of another run's latents, with --from RUN).",
+            metavar="MODEL",
+            show_default=False,
+        ),
+    ],
+    dataset: Annotated[
+        str | None,
+        typer.Option(
+            "--dataset",
+            "-d",
+            metavar="NAME",
+            help="Dataset in the cache (see `swm list dataset`); a frame decoder defaults to its source run's.",
+            show_default=False,
+        ),
+    ] = None,
+    preset: Annotated[
+        str,
+        typer.Option(
+            "--preset", metavar="PRESET", help="Sizes and recipe: tiny (CPU, minutes), small (GPU), paper (upstream's)."
+        ),
+    ] = "tiny",
+    steps: Annotated[
+        int | None,
+        typer.Option(
+            "--steps",
+            parser=int_in(1),
+            metavar="N",
+            help="Optimizer steps (default: the preset's).",
+            show_default=False,
+        ),
+    ] = None,
+    epochs: Annotated[
+        float | None,
+        typer.Option(
+            "--epochs",
+            parser=_float_pos,
+            metavar="E",
+            help="Passes over the train samples (instead of --steps).",
+            show_default=False,
+        ),
+    ] = None,
+    batch_size: Annotated[
+        int | None,
+        typer.Option(
+            "--batch-size",
+            parser=int_in(1),
+            metavar="B",
+            help="Samples per step (default: the preset's).",
+            show_default=False,
+        ),
+    ] = None,
+    lr: Annotated[
+        float | None,
+        typer.Option(
+            "--lr",
+            parser=_float_pos,
+            metavar="LR",
+            help="Peak learning rate (default: the preset's).",
+            show_default=False,
+        ),
+    ] = None,
     device: Annotated[str, typer.Option("--device", metavar="DEV", help="auto, cpu, cuda, cuda:N or mps.")] = "auto",
     precision: Annotated[str, typer.Option("--precision", metavar="P", help="32, bf16 or 16 (16 needs CUDA).")] = "32",
-    name: Annotated[str | None, typer.Option("--name", "--run", metavar="RUN", help="Run name (default: <dataset>-<model>).", show_default=False)] = None,
+    name: Annotated[
+        str | None,
+        typer.Option(
+            "--name", "--run", metavar="RUN", help="Run name (default: <dataset>-<model>).", show_default=False
+        ),
+    ] = None,
     seed: SeedOpt = 0,
     resume: Annotated[bool, typer.Option("--resume", help="Continue the run RUN from its last checkpoint.")] = False,
-    frameskip: Annotated[int | None, typer.Option("--frameskip", parser=int_in(1), metavar="K", help="Env steps per model step (the action block).", show_default=False)] = None,
-    source: Annotated[str | None, typer.Option("--from", metavar="RUN", help="frame only: the run whose latents the decoder learns to turn into frames (run name default: RUN-frame).", show_default=False)] = None,
-    settings: Annotated[list[str] | None, typer.Option("--set", metavar="KEY=VALUE", help="A config field of the model (repeatable), e.g. --set proprio_dim=2; VALUE is read as JSON when it parses (see `swm show model MODEL` for the fields). A key that is also a flag (lr, steps, batch_size, seed, device, frameskip...) sets that flag: giving both takes one value.", show_default=False)] = None,
+    frameskip: Annotated[
+        int | None,
+        typer.Option(
+            "--frameskip",
+            parser=int_in(1),
+            metavar="K",
+            help="Env steps per model step (the action block).",
+            show_default=False,
+        ),
+    ] = None,
+    source: Annotated[
+        str | None,
+        typer.Option(
+            "--from",
+            metavar="RUN",
+            help="frame only: the run whose latents the decoder learns to turn into frames (run name default: RUN-frame).",
+            show_default=False,
+        ),
+    ] = None,
+    settings: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--set",
+            metavar="KEY=VALUE",
+            help="A config field of the model (repeatable), e.g. --set proprio_dim=2; VALUE is read as JSON when it parses (see `swm show model MODEL` for the fields). A key that is also a flag (lr, steps, batch_size, seed, device, frameskip...) sets that flag: giving both takes one value.",
+            show_default=False,
+        ),
+    ] = None,
 ) -> None:
     """Train MODEL on a recorded dataset; the checkpoint goes to $STABLEWM_HOME/checkpoints/RUN.
 
@@ -124,9 +230,22 @@ def train_cmd(
     from ..wm import get_config_class
     from .display import console
 
-    flags = {"model": model, "dataset": dataset, "preset": preset, "steps": steps, "epochs": epochs, "batch_size": batch_size,
-             "lr": lr, "device": device, "precision": precision, "name": name, "seed": seed, "resume": resume,
-             "frameskip": frameskip, "source": source}
+    flags = {
+        "model": model,
+        "dataset": dataset,
+        "preset": preset,
+        "steps": steps,
+        "epochs": epochs,
+        "batch_size": batch_size,
+        "lr": lr,
+        "device": device,
+        "precision": precision,
+        "name": name,
+        "seed": seed,
+        "resume": resume,
+        "frameskip": frameskip,
+        "source": source,
+    }
     given = {k for k in flags if k != "model" and _given(ctx, k)} | {"model"}
     flags, overrides = merge_settings(flags, given, dict(_config_override(item) for item in settings or []))
     model, dataset, preset, source = flags.pop("model"), flags.pop("dataset"), flags.pop("preset"), flags["source"]
@@ -151,4 +270,7 @@ def train_cmd(
     how = "plan with" if prefix == "wm" else "act with"
     if result.features is not None:
         out.print(f"Frozen encoder: {result.features.describe()}", soft_wrap=True)
-    out.print(f"Checkpoint: {result.folder} ({how}: swm eval ENV --policy {prefix}:{result.run}); loss curve: {result.folder / 'loss.png'}", soft_wrap=True)
+    out.print(
+        f"Checkpoint: {result.folder} ({how}: swm eval ENV --policy {prefix}:{result.run}); loss curve: {result.folder / 'loss.png'}",
+        soft_wrap=True,
+    )

@@ -140,7 +140,9 @@ def make_policy(
     if noise is not None and (name != "expert" or not expert_takes_noise(env_id)):
         from ..errors import ConfigError
 
-        raise ConfigError(f"--noise requires the expert policy of an env whose expert takes action noise, got policy {name!r} on {env_id}")
+        raise ConfigError(
+            f"--noise requires the expert policy of an env whose expert takes action noise, got policy {name!r} on {env_id}"
+        )
     if name.startswith(WM_PREFIX):
         from ..planning.learned import PlanSettings, world_model_policy
 
@@ -173,8 +175,9 @@ def run_image_size(policies: Sequence[str]) -> int:
     return DEFAULT_IMAGE_SIZE
 
 
-def check_run_fits(policy: str, env_id: str, image_size: int, *, force: bool = False,
-                   image_option: str = "--image-size ") -> None:
+def check_run_fits(
+    policy: str, env_id: str, image_size: int, *, force: bool = False, image_option: str = "--image-size "
+) -> None:
     """For a ``wm:`` / ``gc:`` policy: raise :class:`~stable_worldmodel.errors.RunMismatchError`
     when its run cannot act on ``env_id`` at ``image_size`` (another action dimension, or other
     frames unless ``force``), and write one ``Warning:`` line per thing it never saw (another env
@@ -187,8 +190,15 @@ def check_run_fits(policy: str, env_id: str, image_size: int, *, force: bool = F
     from .errors import warn
 
     facts, protocol = run_fit.run_facts(run)
-    lines = run_fit.check_run_fits(facts, policy, env_id=env_id, action_dim=env_action_dim(env_id),
-                                   image_size=image_size, force=force, image_option=image_option)
+    lines = run_fit.check_run_fits(
+        facts,
+        policy,
+        env_id=env_id,
+        action_dim=env_action_dim(env_id),
+        image_size=image_size,
+        force=force,
+        image_option=image_option,
+    )
     note = run_fit.partial_note(policy, protocol)
     for line in [*lines, *([note] if note else [])]:
         warn(line)

@@ -36,8 +36,16 @@ SIDE_BY_SIDE = r"swm/(PushT(-Discrete)?-v1|TwoRoom-v[01]|SimplePointMaze-v0)"
 #: DMControl domains with a scripted expert (:mod:`stable_worldmodel.envs.dmcontrol.expert`)
 DMC_EXPERTS = ("cartpole", "pendulum", "reacher")
 BUILTIN: tuple[EnvEntry, ...] = (
-    EnvEntry("swm/Toy-v0", f"{_P}.toy.env:ToyEnv", ("toy", "continuous"), f"{_P}.toy.env:ToyExpert", max_episode_steps=100),
-    EnvEntry("swm/PushT-v1", f"{_P}.pusht.v1:PushTV1", ("paper", "continuous", "pymunk"), f"{_P}.pusht.v1_expert:PushTV1Expert", max_episode_steps=300),
+    EnvEntry(
+        "swm/Toy-v0", f"{_P}.toy.env:ToyEnv", ("toy", "continuous"), f"{_P}.toy.env:ToyExpert", max_episode_steps=100
+    ),
+    EnvEntry(
+        "swm/PushT-v1",
+        f"{_P}.pusht.v1:PushTV1",
+        ("paper", "continuous", "pymunk"),
+        f"{_P}.pusht.v1_expert:PushTV1Expert",
+        max_episode_steps=300,
+    ),
     EnvEntry(
         "swm/PushT-Discrete-v1",
         f"{_P}.pusht.v1:PushTDiscreteV1",
@@ -45,7 +53,13 @@ BUILTIN: tuple[EnvEntry, ...] = (
         f"{_P}.pusht.v1_expert:PushTDiscreteV1Expert",
         max_episode_steps=300,
     ),
-    EnvEntry("swm/PushT-v2", f"{_P}.pusht.env:PushT", ("continuous", "pymunk"), f"{_P}.pusht.expert:PushTExpert", max_episode_steps=300),
+    EnvEntry(
+        "swm/PushT-v2",
+        f"{_P}.pusht.env:PushT",
+        ("continuous", "pymunk"),
+        f"{_P}.pusht.expert:PushTExpert",
+        max_episode_steps=300,
+    ),
     EnvEntry(
         "swm/PushT-Discrete-v2",
         f"{_P}.pusht.env:PushTDiscrete",
@@ -54,9 +68,25 @@ BUILTIN: tuple[EnvEntry, ...] = (
         max_episode_steps=300,
     ),
     # upstream 0.1.1's TwoRoom: no episode limit of its own, as upstream (swm tools cut at 100 steps)
-    EnvEntry("swm/TwoRoom-v1", f"{_P}.two_room.v1:TwoRoomV1Env", ("paper", "continuous"), f"{_P}.two_room.v1_expert:TwoRoomV1Expert"),
-    EnvEntry("swm/TwoRoom-v2", f"{_P}.two_room.env:TwoRoomEnv", ("continuous",), f"{_P}.two_room.expert:TwoRoomExpert", max_episode_steps=100),
-    EnvEntry("swm/TwoRoom-v0", f"{_P}.two_room.legacy:TwoRoomV0Env", ("continuous", "pymunk"), f"{_P}.two_room.legacy_expert:TwoRoomV0Expert"),
+    EnvEntry(
+        "swm/TwoRoom-v1",
+        f"{_P}.two_room.v1:TwoRoomV1Env",
+        ("paper", "continuous"),
+        f"{_P}.two_room.v1_expert:TwoRoomV1Expert",
+    ),
+    EnvEntry(
+        "swm/TwoRoom-v2",
+        f"{_P}.two_room.env:TwoRoomEnv",
+        ("continuous",),
+        f"{_P}.two_room.expert:TwoRoomExpert",
+        max_episode_steps=100,
+    ),
+    EnvEntry(
+        "swm/TwoRoom-v0",
+        f"{_P}.two_room.legacy:TwoRoomV0Env",
+        ("continuous", "pymunk"),
+        f"{_P}.two_room.legacy_expert:TwoRoomV0Expert",
+    ),
     EnvEntry(
         "swm/SimplePointMaze-v0",
         f"{_P}.simple_point_maze.legacy:SimplePointMazeV0Env",
@@ -77,18 +107,50 @@ BUILTIN: tuple[EnvEntry, ...] = (
         f"{_P}.image_positioning.expert:ImagePositioningExpert",
         max_episode_steps=100,
     ),
-    EnvEntry("swm/VoidRun-v0", f"{_P}.voidrun.env:VoidRunEnv", ("discrete",), f"{_P}.voidrun.expert:VoidRunExpert", max_episode_steps=100),
+    EnvEntry(
+        "swm/VoidRun-v0",
+        f"{_P}.voidrun.env:VoidRunEnv",
+        ("discrete",),
+        f"{_P}.voidrun.expert:VoidRunExpert",
+        max_episode_steps=100,
+    ),
     # MuJoCo (extra "mujoco"): no TimeLimit of their own, as upstream; the tools cut at OGBench's /
     # dm_control's episode lengths
-    EnvEntry("swm/OGBCube-v0", f"{_P}.ogbench.cube_env:CubeEnv", ("paper", "continuous", "mujoco"), f"{_P}.ogbench.expert:OGBenchExpert", tool_steps=200),
-    EnvEntry("swm/OGBScene-v0", f"{_P}.ogbench.scene_env:SceneEnv", ("continuous", "mujoco"), f"{_P}.ogbench.expert:OGBenchExpert", tool_steps=750),
+    EnvEntry(
+        "swm/OGBCube-v0",
+        f"{_P}.ogbench.cube_env:CubeEnv",
+        ("paper", "continuous", "mujoco"),
+        f"{_P}.ogbench.expert:OGBenchExpert",
+        tool_steps=200,
+    ),
+    EnvEntry(
+        "swm/OGBScene-v0",
+        f"{_P}.ogbench.scene_env:SceneEnv",
+        ("continuous", "mujoco"),
+        f"{_P}.ogbench.expert:OGBenchExpert",
+        tool_steps=750,
+    ),
     *(
-        EnvEntry(f"swm/{name}DMControl-v0", f"{_P}.dmcontrol.{module}:{name}DMControlWrapper", ("continuous", "mujoco", "dmcontrol"),
-                 f"{_P}.dmcontrol.expert:DMControlExpert" if module in DMC_EXPERTS else None, tool_steps=1000)
+        EnvEntry(
+            f"swm/{name}DMControl-v0",
+            f"{_P}.dmcontrol.{module}:{name}DMControlWrapper",
+            ("continuous", "mujoco", "dmcontrol"),
+            f"{_P}.dmcontrol.expert:DMControlExpert" if module in DMC_EXPERTS else None,
+            tool_steps=1000,
+        )
         for name, module in (
-            ("Humanoid", "humanoid"), ("Cheetah", "cheetah"), ("Hopper", "hopper"), ("Reacher", "reacher"),
-            ("Walker", "walker"), ("Acrobot", "acrobot"), ("Pendulum", "pendulum"), ("Cartpole", "cartpole"),
-            ("BallInCup", "ball_in_cup"), ("Finger", "finger"), ("Manipulator", "manipulator"), ("Quadruped", "quadruped"),
+            ("Humanoid", "humanoid"),
+            ("Cheetah", "cheetah"),
+            ("Hopper", "hopper"),
+            ("Reacher", "reacher"),
+            ("Walker", "walker"),
+            ("Acrobot", "acrobot"),
+            ("Pendulum", "pendulum"),
+            ("Cartpole", "cartpole"),
+            ("BallInCup", "ball_in_cup"),
+            ("Finger", "finger"),
+            ("Manipulator", "manipulator"),
+            ("Quadruped", "quadruped"),
         )
     ),
 )
@@ -150,7 +212,9 @@ def get_entry(env_id: str) -> EnvEntry:
     ours = sorted(_ENTRIES)
     hint = did_you_mean(env_id, ours) or did_you_mean(env_id, [k for k in gym.registry if k not in _ENTRIES])
     dmc = [e for e in ours if "dmcontrol" in _ENTRIES[e].tags]
-    shown = [e for e in ours if e not in dmc] + ([f"swm/<Name>DMControl-v0 ({len(dmc)} domains, see `swm envs`)"] if dmc else [])
+    shown = [e for e in ours if e not in dmc] + (
+        [f"swm/<Name>DMControl-v0 ({len(dmc)} domains, see `swm envs`)"] if dmc else []
+    )
     raise UnknownNameError(
         f"Unknown environment id {env_id!r}.{hint} Our worlds: {', '.join(shown)} (any registered Gymnasium id works too)"
     )
@@ -178,4 +242,3 @@ def register(id: str, entry_point: str | Any) -> None:  # noqa: A002 - 0.0.3's s
     WORLDS.add(id)
     if id not in gym.registry:
         gym.register(id=id, entry_point=entry_point)
-

@@ -155,8 +155,9 @@ class MjRenderer:
     otherwise costs a full draw into the shadow map every frame.
     """
 
-    def __init__(self, model, height: int, width: int, quality: str = "medium", mesh_model=None,
-                 shadowless: Iterable[int] = ()):
+    def __init__(
+        self, model, height: int, width: int, quality: str = "medium", mesh_model=None, shadowless: Iterable[int] = ()
+    ):
         import mujoco
 
         self.quality = check_render_quality("MjRenderer", quality)
@@ -239,7 +240,9 @@ class MjRenderer:
                 cam_id = mujoco.mj_name2id(self._model, mujoco.mjtObj.mjOBJ_CAMERA.value, camera)
                 if cam_id == -1:
                     names = [self._model.camera(i).name for i in range(self._model.ncam)]
-                    raise ConfigError(f"MjRenderer requires a camera of the model, got {camera!r}.{did_you_mean(camera, names)}")
+                    raise ConfigError(
+                        f"MjRenderer requires a camera of the model, got {camera!r}.{did_you_mean(camera, names)}"
+                    )
                 self._camera_ids[camera] = cam_id
             return self._camera_ids[camera]
         cam_id = int(camera)

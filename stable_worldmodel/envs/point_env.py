@@ -29,7 +29,12 @@ class PointEnv(DatasetResetMixin, gym.Env):
     success_distance: float = 1.0
     proprio_dim: int = 2
 
-    def __init__(self, render_mode: str | None = "rgb_array", render_size: tuple[int, int] = (224, 224), render_target: bool = True):
+    def __init__(
+        self,
+        render_mode: str | None = "rgb_array",
+        render_size: tuple[int, int] = (224, 224),
+        render_target: bool = True,
+    ):
         self.render_mode = render_mode
         #: draw the goal disk in the frames (the goal image is then the agent on the goal disk)
         self.render_target = bool(render_target)

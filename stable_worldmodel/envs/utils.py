@@ -55,7 +55,9 @@ def fill_circle(img: np.ndarray, center_px: Sequence[float], radius_px: float, c
     cv2.circle(img, c, max(int(round(radius_px * _ONE)), 1), _color(color), -1, cv2.LINE_AA, _SHIFT)
 
 
-def draw_polyline(img: np.ndarray, points_px: np.ndarray, color: Sequence[int], thickness: int = 1, closed: bool = True) -> None:
+def draw_polyline(
+    img: np.ndarray, points_px: np.ndarray, color: Sequence[int], thickness: int = 1, closed: bool = True
+) -> None:
     """Draw the outline through ``points_px`` (N, 2)."""
     cv2 = _cv2()
     pts = np.round(np.asarray(points_px, np.float64) * _ONE).astype(np.int32).reshape(1, -1, 2)

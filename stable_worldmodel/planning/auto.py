@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import ConfigError, UnknownNameError, did_you_mean
+from ..wm.trust import PICKLE_ENV, pickles_refused
 
 logger = logging.getLogger(__name__)
 
@@ -46,7 +47,6 @@ def model_cache_dir(cache_dir: str | Path | None = None) -> Path:
     return get_cache_dir()
 
 
-PICKLE_ENV = "STABLEWM_REFUSE_PICKLE"  # set to 1 to refuse every pickled checkpoint
 
 
 def _pickles_in(folder: Path) -> list[Path]:
@@ -110,13 +110,12 @@ def _pickled_path(model_name: str | Path, root: Path) -> Path | None:
 
 def _load_pickle(path: Path, caller: str, allow_pickle: bool | None) -> Any:
     """Unpickle the module in ``path`` (it can run code: warned, or refused by the setting)."""
-    import os
     import warnings
 
     import torch
 
     if allow_pickle is None:
-        allow_pickle = os.environ.get(PICKLE_ENV, "").strip().lower() not in ("1", "true", "yes")
+        allow_pickle = not pickles_refused()
     if not allow_pickle:
         raise ConfigError(
             f"{caller} refuses pickled checkpoints ({PICKLE_ENV} is set or allow_pickle=False), got {path}; "
@@ -216,7 +215,11 @@ def _load_with(
 
 
 def AutoCostModel(  # noqa: N802 (seed name)
-    model_name: str | Path, cache_dir: str | Path | None = None, *, allow_pickle: bool | None = None, trusted_targets: Any = None
+    model_name: str | Path,
+    cache_dir: str | Path | None = None,
+    *,
+    allow_pickle: bool | None = None,
+    trusted_targets: Any = None,
 ) -> Any:
     """Load model ``model_name`` from the cache and return its module with ``get_cost`` (in eval mode).
 
@@ -236,10 +239,16 @@ def AutoCostModel(  # noqa: N802 (seed name)
 
 
 def AutoActionableModel(  # noqa: N802 (seed name)
-    model_name: str | Path, cache_dir: str | Path | None = None, *, allow_pickle: bool | None = None, trusted_targets: Any = None
+    model_name: str | Path,
+    cache_dir: str | Path | None = None,
+    *,
+    allow_pickle: bool | None = None,
+    trusted_targets: Any = None,
 ) -> Any:
     """Like :func:`AutoCostModel`, returning the module with ``get_action`` (for FeedForwardPolicy)."""
-    return _load_with("AutoActionableModel", model_name, "get_action", cache_dir, allow_pickle, trusted_targets=trusted_targets)
+    return _load_with(
+        "AutoActionableModel", model_name, "get_action", cache_dir, allow_pickle, trusted_targets=trusted_targets
+    )
 
 
 def _load_model_with_attribute(

@@ -55,7 +55,9 @@ class GoalConditionedPolicy(FeedForwardPolicy):
         return action
 
 
-def load_run(run: str, method: str, expects: str, other_prefix: str, device: str = "auto", cache_dir: str | None = None):
+def load_run(
+    run: str, method: str, expects: str, other_prefix: str, device: str = "auto", cache_dir: str | None = None
+):
     """``(model in eval mode on its device, protocol, device, process, transform)`` of checkpoint ``run``.
 
     ``model`` must have ``method`` (``get_cost`` for ``wm:``, ``get_action`` for ``gc:``), else a
@@ -83,7 +85,9 @@ def load_run(run: str, method: str, expects: str, other_prefix: str, device: str
     return model, protocol, dev, process, {keys.PIXELS: images, keys.GOAL: images}
 
 
-def goal_conditioned_policy(run: str, *, device: str = "auto", cache_dir: str | None = None) -> tuple[GoalConditionedPolicy, dict[str, Any]]:
+def goal_conditioned_policy(
+    run: str, *, device: str = "auto", cache_dir: str | None = None
+) -> tuple[GoalConditionedPolicy, dict[str, Any]]:
     """``(policy, protocol)`` for checkpoint ``run``; give the World ``protocol["history_size"]`` frames."""
     model, protocol, dev, process, transform = load_run(
         run, "get_action", "a goal-conditioned policy checkpoint (gcbc, gcivl, gciql)", "wm", device, cache_dir

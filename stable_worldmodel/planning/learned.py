@@ -97,8 +97,14 @@ class PlanSettings:
 
     def as_dict(self) -> dict[str, Any]:
         return {
-            "solver": self.solver, "horizon": self.horizon, "receding_horizon": self.receding_horizon or self.horizon,
-            "samples": self.samples, "iterations": self.iterations, "topk": self.topk, "seed": self.seed, "cost": self.cost,
+            "solver": self.solver,
+            "horizon": self.horizon,
+            "receding_horizon": self.receding_horizon or self.horizon,
+            "samples": self.samples,
+            "iterations": self.iterations,
+            "topk": self.topk,
+            "seed": self.seed,
+            "cost": self.cost,
             "subgoals": self.subgoals or "none",
             **({"lookahead": self.waypoint_blocks} if self.subgoals not in (None, "none") else {}),
             **({"patience": self.patience} if self.subgoals == "auto" and self.patience else {}),
@@ -142,8 +148,10 @@ def world_model_policy(
     for p in model.parameters():  # GD differentiates w.r.t. the actions only
         p.requires_grad_(False)
     if not hasattr(model, "goal_cost") and settings.cost != "auto":
-        raise ConfigError(f"PlanSettings(cost={settings.cost!r}) requires a model with goal_cost, got {type(model).__name__} "
-                          f"(it plans on its own cost); use cost='auto'")
+        raise ConfigError(
+            f"PlanSettings(cost={settings.cost!r}) requires a model with goal_cost, got {type(model).__name__} "
+            f"(it plans on its own cost); use cost='auto'"
+        )
     if hasattr(model, "goal_cost"):
         model.goal_cost = "min" if settings.cost == "auto" else settings.cost
     if frameskip is not None:  # another block than the run's: its model takes actions of another size
@@ -152,8 +160,11 @@ def world_model_policy(
         check_run_fits(RunFacts.from_protocol(run, protocol), "world_model_policy", frameskip=frameskip)
     block = int(frameskip or protocol.get("frameskip", 1))
     config = PlanConfig(
-        horizon=settings.horizon, receding_horizon=settings.receding_horizon or settings.horizon,
-        history_len=1, action_block=block, warm_start=True,
+        horizon=settings.horizon,
+        receding_horizon=settings.receding_horizon or settings.horizon,
+        history_len=1,
+        action_block=block,
+        warm_start=True,
     )
     solver = _make_solver(model, settings, dev)
     policy = WorldModelPolicy(solver, config, process=process, transform=transform)
@@ -162,17 +173,29 @@ def world_model_policy(
     if settings.subgoals in ("graph", "auto"):
         graph = _subgoal_graph(run, model, protocol, transform, block, settings.waypoint_blocks, dev, cache_dir)
         patience = settings.patience if settings.subgoals == "auto" else None
-        policy.info_hook = _WaypointHook(model, graph, patience, (settings.receding_horizon or settings.horizon) * block)
-        plan["graph"] = {"nodes": len(graph.embeddings), "edges": graph.num_edges, "stride": graph.stride,
-                         "episodes": "train split of " + str(protocol.get("dataset"))}
+        policy.info_hook = _WaypointHook(
+            model, graph, patience, (settings.receding_horizon or settings.horizon) * block
+        )
+        plan["graph"] = {
+            "nodes": len(graph.embeddings),
+            "edges": graph.num_edges,
+            "stride": graph.stride,
+            "episodes": "train split of " + str(protocol.get("dataset")),
+        }
     protocol = {**protocol, "plan": plan, "device": str(dev), "action_block": block}
     if dev.type == "cuda":
         torch.backends.cuda.matmul.allow_tf32 = True
     return policy, protocol
 
 
-def resolve_subgoals(run: str, settings: PlanSettings, cache_dir: str | None = None, *,
-                     protocol: dict | None = None, block: int | None = None) -> PlanSettings:
+def resolve_subgoals(
+    run: str,
+    settings: PlanSettings,
+    cache_dir: str | None = None,
+    *,
+    protocol: dict | None = None,
+    block: int | None = None,
+) -> PlanSettings:
     """``settings`` with ``subgoals="auto"`` kept where a subgoal graph can be built for checkpoint
     ``run`` (trained by ``swm train`` as a LeWM, PLDM, Dreamer or PreJEPA without proprio, its training
     dataset on disk, its ``patience`` filled in for action blocks of ``block`` env steps, by
@@ -187,8 +210,11 @@ def resolve_subgoals(run: str, settings: PlanSettings, cache_dir: str | None = N
     if why:
         logger.info("Run %r plans on the goal alone (subgoals='auto' -> 'none'): %s", run, why)
         return replace(settings, subgoals="none")
-    logger.info("Run %r plans on the goal, and towards waypoints of its training data where it stalls "
-                "(subgoals='auto'; 'none' plans on the goal alone)", run)
+    logger.info(
+        "Run %r plans on the goal, and towards waypoints of its training data where it stalls "
+        "(subgoals='auto'; 'none' plans on the goal alone)",
+        run,
+    )
     block = int(block or protocol.get("frameskip", 1))
     return replace(settings, patience=settings.patience or max(MIN_PATIENCE, settings.horizon * block // 2))
 
@@ -215,8 +241,9 @@ def _graph_unavailable(protocol: dict, cache_dir: str | None) -> str | None:
     return None
 
 
-def _subgoal_graph(run: str, model: Any, protocol: dict, transform: dict, block: int, lookahead: int, dev: Any,
-                   cache_dir: str | None) -> Any:
+def _subgoal_graph(
+    run: str, model: Any, protocol: dict, transform: dict, block: int, lookahead: int, dev: Any, cache_dir: str | None
+) -> Any:
     """The :class:`~.subgoals.SubgoalGraph` of ``run``'s training episodes (a node per frame),
     waypoints ``lookahead`` action blocks of ``block`` env steps ahead."""
     from .. import keys
@@ -226,15 +253,27 @@ def _subgoal_graph(run: str, model: Any, protocol: dict, transform: dict, block:
     _WaypointHook.check(model, run)
     name, episodes = protocol.get("dataset"), protocol.get("train_episodes")
     if not name or episodes is None:
-        raise ConfigError(f"subgoals='graph' requires a run trained by swm train (its protocol names the dataset and "
-                          f"train split), got run {run!r} without them")
+        raise ConfigError(
+            f"subgoals='graph' requires a run trained by swm train (its protocol names the dataset and "
+            f"train split), got run {run!r} without them"
+        )
     path = protocol.get("dataset_path")
     try:
-        dataset = HDF5Dataset(path=path, keys_to_load=[keys.PIXELS]) if path and _exists(path) else HDF5Dataset(name, keys_to_load=[keys.PIXELS], cache_dir=cache_dir)
+        dataset = (
+            HDF5Dataset(path=path, keys_to_load=[keys.PIXELS])
+            if path and _exists(path)
+            else HDF5Dataset(name, keys_to_load=[keys.PIXELS], cache_dir=cache_dir)
+        )
     except FileNotFoundError as exc:
         raise ConfigError(f"subgoals='graph' requires run {run!r}'s training dataset {name!r}: {exc}") from exc
-    return build_subgoal_graph(lambda x: model.encode_pixels(x).flatten(1), dataset, episodes, transform[keys.PIXELS],
-                               device=dev, lookahead_steps=max(1, int(lookahead)) * block)
+    return build_subgoal_graph(
+        lambda x: model.encode_pixels(x).flatten(1),
+        dataset,
+        episodes,
+        transform[keys.PIXELS],
+        device=dev,
+        lookahead_steps=max(1, int(lookahead)) * block,
+    )
 
 
 def _exists(path: str) -> bool:
@@ -311,8 +350,9 @@ class _WaypointHook:
         return info
 
 
-def attach_prediction_panel(policy: Any, run: str, decoder: str | None = None, *, device: str = "auto",
-                            cache_dir: str | None = None) -> str | None:
+def attach_prediction_panel(
+    policy: Any, run: str, decoder: str | None = None, *, device: str = "auto", cache_dir: str | None = None
+) -> str | None:
     """Make ``policy`` (a ``wm:run`` :class:`~stable_worldmodel.policy.WorldModelPolicy`) decode
     what it predicts with frame decoder run ``decoder`` (default: ``<run>-frame`` when it
     exists; ``swm train frame --from RUN`` makes it; else the model's own image decoder when it
@@ -330,16 +370,22 @@ def attach_prediction_panel(policy: Any, run: str, decoder: str | None = None, *
         if not (isinstance(model, DecodesFrames) and model.decodes_frames):
             return None
         protocol = read_protocol(resolve_checkpoint(run, cache_dir))
-        policy.prediction_panel = PredictionPanel(model, None, protocol.get("image_mean", (0.5,) * 3),
-                                                  protocol.get("image_std", (0.5,) * 3))
+        policy.prediction_panel = PredictionPanel(
+            model, None, protocol.get("image_mean", (0.5,) * 3), protocol.get("image_std", (0.5,) * 3)
+        )
         return run
     frame, protocol = load_checkpoint(name, cache_dir)
     if not isinstance(frame, FrameModel):
-        raise ConfigError(f"A prediction panel requires a frame decoder run (swm train frame --from {run}), got {type(frame).__name__} in {name!r}")
+        raise ConfigError(
+            f"A prediction panel requires a frame decoder run (swm train frame --from {run}), got {type(frame).__name__} in {name!r}"
+        )
     source = protocol.get("config", {}).get("source")
     if source not in (None, run):
-        logger.warning("Frame decoder %r was trained on the latents of %r, not %r: its frames may not mean much", name, source, run)
+        logger.warning(
+            "Frame decoder %r was trained on the latents of %r, not %r: its frames may not mean much", name, source, run
+        )
     frame = frame.to(resolve_device(device)).eval()
-    policy.prediction_panel = PredictionPanel(policy.solver.model, frame, protocol.get("image_mean", (0.5,) * 3),
-                                              protocol.get("image_std", (0.5,) * 3))
+    policy.prediction_panel = PredictionPanel(
+        policy.solver.model, frame, protocol.get("image_mean", (0.5,) * 3), protocol.get("image_std", (0.5,) * 3)
+    )
     return name

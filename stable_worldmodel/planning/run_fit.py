@@ -146,9 +146,18 @@ def check_run_fits(
             f"{facts.frameskip} env steps), got {frameskip_option}{int(frameskip)}; drop {_bare(frameskip_option)} (it "
             f"defaults to the run's), or train a run with --frameskip {int(frameskip)}"
         )
-    if image_size is not None and facts.frame_size is not None and (int(image_size),) * 2 != facts.frame_size and not force:
+    if (
+        image_size is not None
+        and facts.frame_size is not None
+        and (int(image_size),) * 2 != facts.frame_size
+        and not force
+    ):
         h, w = facts.frame_size
-        resized = f" (frames are then resized to the model's {facts.model_size}x{facts.model_size})" if facts.model_size else ""
+        resized = (
+            f" (frames are then resized to the model's {facts.model_size}x{facts.model_size})"
+            if facts.model_size
+            else ""
+        )
         raise RunMismatchError(
             f"{who} requires {image_option}{h} (run {run!r} was trained on {h}x{w} frames of {facts.trained_on()}), "
             f"got {image_option}{int(image_size)}; drop {_bare(image_option)} (it defaults to the run's) or set it to {h}, "
@@ -180,5 +189,7 @@ def partial_note(who: str, protocol: dict[str, Any]) -> str | None:
     if partial is None:
         return None
     done, steps = partial
-    return (f"{who} uses the checkpoint of step {done} of {steps} (partial run: training stopped before its last step; "
-            f"continue it with swm train ... --name {who.split(':', 1)[-1]} --resume)")
+    return (
+        f"{who} uses the checkpoint of step {done} of {steps} (partial run: training stopped before its last step; "
+        f"continue it with swm train ... --name {who.split(':', 1)[-1]} --resume)"
+    )

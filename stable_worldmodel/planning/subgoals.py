@@ -70,7 +70,9 @@ class SubgoalGraph:
         emb = torch.as_tensor(embeddings, dtype=torch.float32).detach().cpu()
         ep = np.asarray(episode).reshape(-1)
         if emb.ndim != 2 or len(emb) != len(ep) or len(emb) < 2:
-            raise ConfigError(f"SubgoalGraph requires embeddings (N, D) with N >= 2 and one episode id per node, got {tuple(emb.shape)} and {ep.shape}")
+            raise ConfigError(
+                f"SubgoalGraph requires embeddings (N, D) with N >= 2 and one episode id per node, got {tuple(emb.shape)} and {ep.shape}"
+            )
         if not (isinstance(lookahead, (int, np.integer)) and not isinstance(lookahead, bool) and lookahead >= 1):
             raise ConfigError(f"SubgoalGraph requires lookahead >= 1 (an int), got {lookahead!r}")
         if not 0.0 < radius_quantile <= 1.0:
@@ -100,8 +102,10 @@ class SubgoalGraph:
         self._cache: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
     def __repr__(self) -> str:
-        return (f"SubgoalGraph(nodes={len(self.embeddings)}, edges={self.num_edges}, lookahead={self.lookahead}, "
-                f"radius={self.radius:.4g})")
+        return (
+            f"SubgoalGraph(nodes={len(self.embeddings)}, edges={self.num_edges}, lookahead={self.lookahead}, "
+            f"radius={self.radius:.4g})"
+        )
 
     def nearest(self, emb: torch.Tensor) -> np.ndarray:
         """Index of the node nearest to each of ``emb: (B, D)``: ``(B,)``."""
@@ -120,7 +124,9 @@ class SubgoalGraph:
                 level += 1
                 counts = self._into_ptr[frontier + 1] - self._into_ptr[frontier]
                 parent = np.repeat(frontier, counts)
-                cand = self._into[np.repeat(self._into_ptr[frontier] - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())]
+                cand = self._into[
+                    np.repeat(self._into_ptr[frontier] - np.cumsum(counts) + counts, counts) + np.arange(counts.sum())
+                ]
                 new = np.isinf(dist[cand])
                 cand, first = np.unique(cand[new], return_index=True)
                 dist[cand], nxt[cand] = level, parent[new][first]
@@ -143,7 +149,7 @@ class SubgoalGraph:
         """``current, goal: (B, D)`` -> the embeddings to plan towards ``(B, D)`` (module docstring)."""
         out = goal.clone()
         starts, goals = self.nearest(current), self.nearest(goal)
-        for i, (s, g) in enumerate(zip(starts, goals)):
+        for i, (s, g) in enumerate(zip(starts, goals, strict=False)):
             path = self.path(int(s), int(g))  # [] when unreachable
             if len(path) > self.lookahead + 1:  # farther than the lookahead: the node that far along
                 out[i] = self.embeddings[path[self.lookahead]].to(out)
@@ -185,7 +191,10 @@ class StallMonitor:
         goal = goal.detach().float().cpu()
         if self._goal is None or self._goal.shape != goal.shape:
             self._goal, self._best = goal.clone(), dist.clone()
-            self._idle, self._stalled = torch.zeros(len(dist), dtype=torch.long), torch.zeros(len(dist), dtype=torch.bool)
+            self._idle, self._stalled = (
+                torch.zeros(len(dist), dtype=torch.long),
+                torch.zeros(len(dist), dtype=torch.bool),
+            )
             return self._stalled.clone()
         new = (goal - self._goal).abs().amax(dim=-1) > 1e-5
         if restarted is not None:

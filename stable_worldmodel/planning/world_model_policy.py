@@ -71,7 +71,9 @@ class WorldModelPolicy(BasePolicy):
             raise ConfigError(f"WorldModelPolicy requires a PlanConfig, got {config!r}")
         for key, proc in (process or {}).items():
             if not isinstance(proc, Transformable):
-                raise ConfigError(f"WorldModelPolicy requires process[{key!r}] with transform/inverse_transform, got {proc!r}")
+                raise ConfigError(
+                    f"WorldModelPolicy requires process[{key!r}] with transform/inverse_transform, got {proc!r}"
+                )
         self.type = "world_model"
         self.solver, self.cfg = solver, config
         self.process = process if process is not None else {}

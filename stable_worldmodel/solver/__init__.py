@@ -9,7 +9,6 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from .._lazy import lazy_getattr
-
 from ._registry import BUILTIN, get_solver_class, list_solvers, make_solver, register_solver
 
 _ATTRS = {
@@ -34,6 +33,7 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:  # pragma: no cover
+    from .base import AUTO_BATCH, BaseSolver  # noqa: F401
     from .cem import CEMSolver  # noqa: F401
     from .discrete_solvers import PGDSolver  # noqa: F401
     from .gd import GDSolver, GradientSolver  # noqa: F401
@@ -41,5 +41,4 @@ if TYPE_CHECKING:  # pragma: no cover
     from .mppi import MPPISolver  # noqa: F401
     from .nevergrad import NevergradSolver  # noqa: F401
     from .random import RandomSolver  # noqa: F401
-    from .base import AUTO_BATCH, BaseSolver  # noqa: F401
     from .solver import Costable, Solver  # noqa: F401

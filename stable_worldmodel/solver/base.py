@@ -441,7 +441,9 @@ class BaseSolver:
         if init_action is not None:
             return init_action.clone()
         start, stop = self._rows
-        return self._clamp(torch.zeros(stop - start, self.horizon, self.action_dim, device=self.device, dtype=self.dtype))
+        return self._clamp(
+            torch.zeros(stop - start, self.horizon, self.action_dim, device=self.device, dtype=self.dtype)
+        )
 
     def _bounds_like(self, x: torch.Tensor, rows: tuple[int, int] | None) -> tuple[torch.Tensor, torch.Tensor]:
         """Bounds of ``rows`` (default: the current rows) shaped to broadcast against ``x: (b, ..., A)``."""
@@ -512,7 +514,9 @@ class BaseSolver:
         mean = self._initial_mean(init_action)
         return mean, torch.full_like(mean, self.var_scale), self._expand(info, self.num_samples)
 
-    def _sample_elites(self, info_s: dict, mean: torch.Tensor, std: torch.Tensor, k: int) -> tuple[torch.Tensor, torch.Tensor]:
+    def _sample_elites(
+        self, info_s: dict, mean: torch.Tensor, std: torch.Tensor, k: int
+    ) -> tuple[torch.Tensor, torch.Tensor]:
         """One Gaussian round: sample ``num_samples`` around ``mean``, score, return the ``k`` elites."""
         candidates = self._sample_around(mean, std, self.num_samples)
         return self._elites(candidates, self._cost(info_s, candidates), k)

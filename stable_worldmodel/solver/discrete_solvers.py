@@ -47,7 +47,9 @@ class PGDSolver(GradientSolver):
     but the warm start itself.
     """
 
-    knobs = PlanKnobs(samples=None, fixed=(("num_samples", 1),), summary="projected gradient descent (discrete actions)")
+    knobs = PlanKnobs(
+        samples=None, fixed=(("num_samples", 1),), summary="projected gradient descent (discrete actions)"
+    )
 
     def configure(self, *, action_space: gym.Space, n_envs: int, config: Any) -> None:
         """Like :meth:`BaseSolver.configure`; a single ``Discrete(n)`` is batched to ``n_envs`` envs."""

@@ -133,5 +133,4 @@ class GradientSolver(BaseSolver):
         return {"actions": best, "costs": cost}
 
 
-
 GDSolver = GradientSolver

@@ -64,7 +64,9 @@ class NevergradSolver(BaseSolver):
             param.set_bounds(np.broadcast_to(low, shape).copy(), np.broadcast_to(high, shape).copy(), method="clipping")
         param.random_state = np.random.RandomState((self._solve_seed + row) % (2**32))
         budget = self.n_steps * self.num_samples
-        return ng.optimizers.registry[self.optimizer](parametrization=param, budget=budget, num_workers=self.num_samples)
+        return ng.optimizers.registry[self.optimizer](
+            parametrization=param, budget=budget, num_workers=self.num_samples
+        )
 
     @torch.no_grad()
     def _optimize(self, info: dict, init_action: torch.Tensor | None) -> dict:
@@ -81,8 +83,8 @@ class NevergradSolver(BaseSolver):
             costs = self._cost(info_s, candidates).float().cpu().numpy()
             if not np.isfinite(costs).all():
                 raise ConfigError("NevergradSolver requires finite costs from get_cost, got NaN or inf")
-            for opt, row, row_costs in zip(optimizers, asked, costs):
-                for cand, cost in zip(row, row_costs):
+            for opt, row, row_costs in zip(optimizers, asked, costs, strict=False):
+                for cand, cost in zip(row, row_costs, strict=False):
                     opt.tell(cand, float(cost))
             pick = costs.argmin(axis=1)
             better = costs[np.arange(len(pick)), pick] < best_costs

@@ -418,4 +418,3 @@ def _gym_repr(space: Any) -> str:
         if base.__module__.startswith("gymnasium.spaces") and "__repr__" in vars(base):
             return base.__repr__(space)
     return repr(space)
-

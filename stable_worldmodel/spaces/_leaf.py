@@ -363,7 +363,6 @@ class Discrete(StatefulSpaceMixin, gym.spaces.Discrete):
         self._setup_state(init_value, constrain_fn)
 
 
-
 class MultiDiscrete(StatefulSpaceMixin, gym.spaces.MultiDiscrete):
     """A ``gymnasium.spaces.MultiDiscrete`` with a value (an array, or None until set).
 
@@ -420,4 +419,3 @@ class RGBBox(Box):
 
     def __repr__(self) -> str:
         return f"RGBBox({self.shape})"
-

@@ -115,9 +115,25 @@ def train(
         resume = _check_run_folder(folder, resume, run)
         distributed.barrier(dist_info)  # every process has checked before process 0 creates the folder
         return _train_locked(
-            model=model, dataset=dataset, preset=preset, steps=steps, epochs=epochs, precision=precision, seed=seed,
-            resume=resume, cache_dir=cache_dir, log_every=log_every, val_every=val_every, ckpt_every=ckpt_every,
-            progress=progress, feature_cache=feature_cache, cfg=cfg, dist_info=dist_info, dev=dev, run=run, folder=folder,
+            model=model,
+            dataset=dataset,
+            preset=preset,
+            steps=steps,
+            epochs=epochs,
+            precision=precision,
+            seed=seed,
+            resume=resume,
+            cache_dir=cache_dir,
+            log_every=log_every,
+            val_every=val_every,
+            ckpt_every=ckpt_every,
+            progress=progress,
+            feature_cache=feature_cache,
+            cfg=cfg,
+            dist_info=dist_info,
+            dev=dev,
+            run=run,
+            folder=folder,
         )
     finally:
         if lock is not None:
@@ -170,15 +186,37 @@ def _check_run_folder(folder: Any, resume: bool, run: str) -> bool:
             )
         logger.warning("Run %r has no checkpoint to resume (%s): starting from step 0", run, folder)
     elif has_weights or has_state:
-        raise FileExistsError(f"Run folder {folder} exists: pass resume=True (--resume) to continue it, or another name")
+        raise FileExistsError(
+            f"Run folder {folder} exists: pass resume=True (--resume) to continue it, or another name"
+        )
     if folder.exists():  # killed before its first checkpoint: nothing in it is worth keeping
         logger.info("Run folder %s holds no checkpoint: reusing it", folder)
         shutil.rmtree(folder)
     return False
 
 
-def _train_locked(*, model, dataset, preset, steps, epochs, precision, seed, resume, cache_dir, log_every, val_every,
-                  ckpt_every, progress, feature_cache, cfg, dist_info, dev, run, folder) -> TrainResult:
+def _train_locked(
+    *,
+    model,
+    dataset,
+    preset,
+    steps,
+    epochs,
+    precision,
+    seed,
+    resume,
+    cache_dir,
+    log_every,
+    val_every,
+    ckpt_every,
+    progress,
+    feature_cache,
+    cfg,
+    dist_info,
+    dev,
+    run,
+    folder,
+) -> TrainResult:
     import shutil
 
     import torch
@@ -205,7 +243,9 @@ def _train_locked(*, model, dataset, preset, steps, epochs, precision, seed, res
     # statistics of the data (a frozen encoder's standardization, Dreamer's mean frame) are learned here, once
     from .features import fit_frozen_encoder
 
-    if fit_frozen_encoder((net.frozen_encoder() if frozen else net).to(dev), data.dataset, data.train_episodes, cfg, dev):
+    if fit_frozen_encoder(
+        (net.frozen_encoder() if frozen else net).to(dev), data.dataset, data.train_episodes, cfg, dev
+    ):
         logger.info("%s fitted to the training frames of %s", "Frozen encoder" if frozen else "Model", dataset)
     if feature_cache and frozen and not data.goals:
         from .features import load_or_compute_features
@@ -234,22 +274,44 @@ def _train_locked(*, model, dataset, preset, steps, epochs, precision, seed, res
         "final": None,  # set when the run ends: a run killed mid-way shows as partial
     }
     if features is not None:
-        protocol["feature_cache"] = {"file": str(features.path), "computed": features.computed, "seconds": round(features.seconds, 3)}
+        protocol["feature_cache"] = {
+            "file": str(features.path),
+            "computed": features.computed,
+            "seconds": round(features.seconds, 3),
+        }
     val_every = val_every if val_every is not None else max(log_every, steps // 10)
     ckpt_every = ckpt_every if ckpt_every is not None else max(1, steps // 4)
     trainer = Trainer(
-        net, data, cfg, folder=folder, run=run, device=dev, precision=precision, seed=seed, steps=steps,
-        log_every=log_every, val_every=val_every, ckpt_every=ckpt_every, progress=progress, config_tree=tree, protocol=protocol,
+        net,
+        data,
+        cfg,
+        folder=folder,
+        run=run,
+        device=dev,
+        precision=precision,
+        seed=seed,
+        steps=steps,
+        log_every=log_every,
+        val_every=val_every,
+        ckpt_every=ckpt_every,
+        progress=progress,
+        config_tree=tree,
+        protocol=protocol,
         dist=dist_info,
     )
     if dist_info.enabled:
-        protocol["distributed"] = {"processes": dist_info.world_size, "backend": "nccl" if dev.type == "cuda" else "gloo"}
+        protocol["distributed"] = {
+            "processes": dist_info.world_size,
+            "backend": "nccl" if dev.type == "cuda" else "gloo",
+        }
     if dist_info.is_main:
         folder.mkdir(parents=True, exist_ok=True)
     if resume:
         state = load_train_state(state_path, map_location=dev)
         if int(state.get("steps", steps)) != steps:
-            raise ConfigError(f"train(resume=True) requires the same number of steps as the run ({state.get('steps')}), got {steps}")
+            raise ConfigError(
+                f"train(resume=True) requires the same number of steps as the run ({state.get('steps')}), got {steps}"
+            )
         trainer.load_state_dict(state)
     try:
         log = MetricsLog(folder, resume_step=trainer.step if resume else None) if dist_info.is_main else _NoLog()

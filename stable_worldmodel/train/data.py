@@ -95,14 +95,21 @@ class TrainData:
                 "gives nothing to learn)"
             )
         self.dataset = HDF5Dataset(
-            name, frameskip=cfg.frameskip, num_steps=cfg.num_steps, keys_to_load=[keys.PIXELS, keys.ACTION, *self.extra_keys],
+            name,
+            frameskip=cfg.frameskip,
+            num_steps=cfg.num_steps,
+            keys_to_load=[keys.PIXELS, keys.ACTION, *self.extra_keys],
             cache_dir=cache_dir,
         )
         shape, _ = self.dataset.column_shape(keys.PIXELS)
         if len(shape) != 3 or shape[-1] not in (1, 3):
-            raise DatasetFormatError(f"Training requires pixels of shape (N, H, W, 3), got {shape} in {self.dataset.path}")
+            raise DatasetFormatError(
+                f"Training requires pixels of shape (N, H, W, 3), got {shape} in {self.dataset.path}"
+            )
         if shape[-1] != len(cfg.image_mean):
-            raise ConfigError(f"Training requires {len(cfg.image_mean)}-channel images, got {shape[-1]} channels in {self.dataset.path}")
+            raise ConfigError(
+                f"Training requires {len(cfg.image_mean)}-channel images, got {shape[-1]} channels in {self.dataset.path}"
+            )
         self.image_shape = tuple(int(v) for v in shape)
         self.action_dim = int(np.prod(self.dataset.column_shape(keys.ACTION)[0]))
         for key, expected in self.extra_widths.items():
@@ -127,10 +134,17 @@ class TrainData:
         # goal_<k> is in the units of <k> when <k> is read too: it shares <k>'s normalizer (planning falls back to it
         # as well, see prepare_info), which the protocol therefore does not repeat
         prefix = keys.goal_key("")
-        self._shared_normalizer = {key: key[len(prefix):] for key in self.extra_keys
-                                   if key.startswith(prefix) and key[len(prefix):] in self.extra_widths}
-        self.extra_normalizers = {key: self._fit_normalizer(key) for key in self.extra_keys if key not in self._shared_normalizer}
-        self.extra_normalizers.update({key: self.extra_normalizers[base] for key, base in self._shared_normalizer.items()})
+        self._shared_normalizer = {
+            key: key[len(prefix) :]
+            for key in self.extra_keys
+            if key.startswith(prefix) and key[len(prefix) :] in self.extra_widths
+        }
+        self.extra_normalizers = {
+            key: self._fit_normalizer(key) for key in self.extra_keys if key not in self._shared_normalizer
+        }
+        self.extra_normalizers.update(
+            {key: self.extra_normalizers[base] for key, base in self._shared_normalizer.items()}
+        )
         self._reward_cumsum = self._cumulative_rewards() if self.needs_reward else None
         self.features: np.ndarray | None = None  # frozen-encoder features per dataset row (use_features)
         self.goals = self._goal_samplers(cfg) if isinstance(cfg, GoalConditioned) else {}
@@ -138,18 +152,25 @@ class TrainData:
     def _goal_samplers(self, cfg: Any) -> dict[str, GoalSampler]:
         """Batch key -> sampler of its goals (``goal_pixels``, and ``actor_goal_pixels`` when configured)."""
         groups = [self.train_episodes, self.val_episodes]
-        common = dict(gamma=cfg.goal_gamma, frameskip=cfg.frameskip, current_offset=(cfg.history_size - 1) * cfg.frameskip)
+        common = dict(
+            gamma=cfg.goal_gamma, frameskip=cfg.frameskip, current_offset=(cfg.history_size - 1) * cfg.frameskip
+        )
         lengths, offsets = np.asarray(self.dataset.lengths), np.asarray(self.dataset.offsets)
         goal_key = keys.goal_key(keys.PIXELS)
         samplers = {goal_key: GoalSampler(lengths, offsets, groups, cfg.goal_probabilities, **common)}
         if cfg.actor_goal_probabilities:
-            samplers[f"actor_{goal_key}"] = GoalSampler(lengths, offsets, groups, cfg.actor_goal_probabilities, **common)
+            samplers[f"actor_{goal_key}"] = GoalSampler(
+                lengths, offsets, groups, cfg.actor_goal_probabilities, **common
+            )
         return samplers
 
     def _fit_normalizer(self, key: str = keys.ACTION) -> Normalizer:
         values = self.dataset.get_col_data(key).reshape(self.dataset.num_rows, -1)
         rows = np.concatenate(
-            [np.arange(o, o + n) for o, n in zip(self.dataset.offsets[self.train_episodes], self.dataset.lengths[self.train_episodes])]
+            [
+                np.arange(o, o + n)
+                for o, n in zip(self.dataset.offsets[self.train_episodes], self.dataset.lengths[self.train_episodes], strict=False)
+            ]
         )
         return Normalizer.fit(values[rows])
 
@@ -193,9 +214,13 @@ class TrainData:
         if goal_keys:
             generator = generator or torch.Generator().manual_seed(self.seed * 1_000_003 + int(index[0]))
             eps, starts = self.dataset._locate_many(index)
-            frames = torch.cat([frames, *(self._goal_frames(self.goals[k].sample(eps, starts, generator)) for k in goal_keys)], dim=1)
+            frames = torch.cat(
+                [frames, *(self._goal_frames(self.goals[k].sample(eps, starts, generator)) for k in goal_keys)], dim=1
+            )
         cfg = self.cfg
-        pixels = preprocess_images(frames.to(self.device, non_blocking=True), cfg.image_mean, cfg.image_std, cfg.image_size)
+        pixels = preprocess_images(
+            frames.to(self.device, non_blocking=True), cfg.image_mean, cfg.image_std, cfg.image_size
+        )
         out = {keys.PIXELS: pixels[:, :t], **self._normalized(raw)}
         for i, key in enumerate(goal_keys):
             out[key] = pixels[:, t + i : t + i + 1]
@@ -207,7 +232,9 @@ class TrainData:
         if self.goals:
             raise ConfigError("Training from cached features requires a config without hindsight goals")
         if len(features) != self.dataset.num_rows:
-            raise ConfigError(f"Training requires one feature row per dataset row, got {len(features)} for {self.dataset.num_rows}")
+            raise ConfigError(
+                f"Training requires one feature row per dataset row, got {len(features)} for {self.dataset.num_rows}"
+            )
         self.features = features
 
     def _feature_batch(self, index: np.ndarray) -> dict[str, torch.Tensor]:
@@ -217,9 +244,15 @@ class TrainData:
         rows = starts[:, None] + ds._row_offsets(keys.PIXELS)[None, :]  # (B, T) dataset rows of the frames
         unique, where = np.unique(rows, return_inverse=True)  # one sorted read of the memory map
         feats = torch.from_numpy(np.asarray(self.features[unique]))
-        raw = {key: torch.from_numpy(np.ascontiguousarray(ds._read_windows(key, starts))) for key in (keys.ACTION, *self.extra_keys)}
+        raw = {
+            key: torch.from_numpy(np.ascontiguousarray(ds._read_windows(key, starts)))
+            for key in (keys.ACTION, *self.extra_keys)
+        }
         raw[keys.ACTION] = raw[keys.ACTION].reshape(len(starts), ds.num_steps, -1)  # (B, span, A) -> action blocks
-        return {"pixels_emb": feats[torch.from_numpy(where.reshape(rows.shape))].to(self.device), **self._normalized(raw)}
+        return {
+            "pixels_emb": feats[torch.from_numpy(where.reshape(rows.shape))].to(self.device),
+            **self._normalized(raw),
+        }
 
     def _normalized(self, raw: dict[str, torch.Tensor]) -> dict[str, torch.Tensor]:
         """``action`` blocks and the extra columns of ``raw`` ``(B, T, ...)`` as normalized

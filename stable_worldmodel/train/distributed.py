@@ -55,7 +55,7 @@ class DistInfo:
     def shard(self, index: np.ndarray) -> np.ndarray:
         """This process's contiguous slice of a global batch ``index`` (the size divides evenly)."""
         n = len(index) // self.world_size
-        return index[self.rank * n:(self.rank + 1) * n]
+        return index[self.rank * n : (self.rank + 1) * n]
 
 
 def env_world_size() -> int:
@@ -172,8 +172,9 @@ class _GlobalBatchNorm(torch.nn.modules.batchnorm._BatchNorm):
         if self.num_batches_tracked is not None:
             self.num_batches_tracked.add_(1)
         momentum = self.momentum if self.momentum is not None else 1.0 / float(self.num_batches_tracked)
-        out = torch.nn.functional.batch_norm(full, self.running_mean, self.running_var, self.weight, self.bias,
-                                             True, momentum, self.eps)
+        out = torch.nn.functional.batch_norm(
+            full, self.running_mean, self.running_var, self.weight, self.bias, True, momentum, self.eps
+        )
         return out.narrow(0, dist.get_rank() * n, n)
 
 

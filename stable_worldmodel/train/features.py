@@ -48,8 +48,9 @@ class FeatureCache:
         return f"frozen-encoder features of {len(self.features)} frames {verb} in {self.seconds:.1f} s ({self.path})"
 
 
-def fit_frozen_encoder(encoder: torch.nn.Module, dataset: Any, episodes: Any, cfg: Any, device: torch.device,
-                       max_frames: int = 4096) -> bool:
+def fit_frozen_encoder(
+    encoder: torch.nn.Module, dataset: Any, episodes: Any, cfg: Any, device: torch.device, max_frames: int = 4096
+) -> bool:
     """Fit a frozen encoder (or a model) that learns fixed statistics from data (one with
     ``fit_to_frames``, e.g. :class:`~stable_worldmodel.wm.prejepa.module.BlurPatchEncoder`, also
     inside an ``EvalOnly`` wrapper, or :class:`~stable_worldmodel.wm.dreamer.Dreamer`) on up to
@@ -61,7 +62,9 @@ def fit_frozen_encoder(encoder: torch.nn.Module, dataset: Any, episodes: Any, cf
         return False
     eps = np.asarray(episodes, dtype=np.int64)
     lengths, offsets = np.asarray(dataset.lengths)[eps], np.asarray(dataset.offsets)[eps]
-    rows = np.concatenate([np.arange(o, o + n) for o, n in zip(offsets, lengths)]) if len(eps) else np.zeros(0, np.int64)
+    rows = (
+        np.concatenate([np.arange(o, o + n) for o, n in zip(offsets, lengths, strict=False)]) if len(eps) else np.zeros(0, np.int64)
+    )
     if len(rows) < 2:
         raise ValueError(f"fitting the frozen encoder requires at least 2 training frames, got {len(rows)}")
     rows = rows[np.unique(np.linspace(0, len(rows) - 1, min(len(rows), max_frames)).astype(np.int64))]
@@ -110,7 +113,9 @@ def load_or_compute_features(
         else:
             if len(features) == dataset.num_rows:
                 return FeatureCache(features, path, computed=False, seconds=time.perf_counter() - start)
-            logger.warning("Ignoring the feature cache %s: %d rows for %d dataset rows", path, len(features), dataset.num_rows)
+            logger.warning(
+                "Ignoring the feature cache %s: %d rows for %d dataset rows", path, len(features), dataset.num_rows
+            )
     path.parent.mkdir(parents=True, exist_ok=True)
     partial = path.with_name(f".{path.name}.{os.getpid()}.partial")
     out = None
@@ -123,7 +128,9 @@ def load_or_compute_features(
                 feats = encode(preprocess_images(images, cfg.image_mean, cfg.image_std, cfg.image_size))[:, 0]
                 feats = feats.float().cpu().numpy()
                 if out is None:
-                    out = np.lib.format.open_memmap(partial, mode="w+", dtype=np.float32, shape=(dataset.num_rows, *feats.shape[1:]))
+                    out = np.lib.format.open_memmap(
+                        partial, mode="w+", dtype=np.float32, shape=(dataset.num_rows, *feats.shape[1:])
+                    )
                 out[lo:hi] = feats
         if out is None:
             raise ValueError(f"Feature cache requires a dataset with rows, got none in {dataset.path}")

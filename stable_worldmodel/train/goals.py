@@ -34,8 +34,16 @@ class GoalSampler:
     episode (e.g. ``[train_episodes, val_episodes]``: no goal leaks across the split).
     """
 
-    def __init__(self, lengths: np.ndarray, offsets: np.ndarray, groups: Sequence[np.ndarray], probabilities: Mapping[str, float],
-                 gamma: float = 0.99, frameskip: int = 1, current_offset: int = 0):
+    def __init__(
+        self,
+        lengths: np.ndarray,
+        offsets: np.ndarray,
+        groups: Sequence[np.ndarray],
+        probabilities: Mapping[str, float],
+        gamma: float = 0.99,
+        frameskip: int = 1,
+        current_offset: int = 0,
+    ):
         probs = check_goal_probabilities(probabilities, "GoalSampler")
         self.lengths, self.offsets = np.asarray(lengths, np.int64), np.asarray(offsets, np.int64)
         self.cum_probs = np.cumsum([probs.get(kind, 0.0) for kind in GOAL_SAMPLING])

@@ -1,10 +1,10 @@
 """The run folder of a training run: metrics files, the loss-curve plot, protocol and state files.
 
-    $STABLEWM_HOME/checkpoints/<run>/
-        weights.pt  config.json  protocol.json     the model (loadable with load_pretrained)
-        step_<N>/weights.pt + config.json          periodic checkpoints
-        train_state.ckpt                           optimizer, scheduler, scaler, RNG, step (--resume)
-        metrics.jsonl  metrics.csv  loss.png       what happened
+$STABLEWM_HOME/checkpoints/<run>/
+    weights.pt  config.json  protocol.json     the model (loadable with load_pretrained)
+    step_<N>/weights.pt + config.json          periodic checkpoints
+    train_state.ckpt                           optimizer, scheduler, scaler, RNG, step (--resume)
+    metrics.jsonl  metrics.csv  loss.png       what happened
 """
 
 from __future__ import annotations
@@ -38,9 +38,18 @@ def rng_state(generator: Any) -> dict[str, Any]:
     return {
         "torch": torch.get_rng_state(),
         "cuda": torch.cuda.get_rng_state_all() if torch.cuda.is_available() else [],
-        "numpy": {"name": str(name), "keys": torch.from_numpy(np.asarray(keys, dtype=np.int64)), "pos": int(pos),
-                  "has_gauss": int(has_gauss), "cached_gaussian": float(cached)},
-        "python": {"version": int(version), "state": torch.tensor(internal, dtype=torch.int64), "gauss_next": gauss_next},
+        "numpy": {
+            "name": str(name),
+            "keys": torch.from_numpy(np.asarray(keys, dtype=np.int64)),
+            "pos": int(pos),
+            "has_gauss": int(has_gauss),
+            "cached_gaussian": float(cached),
+        },
+        "python": {
+            "version": int(version),
+            "state": torch.tensor(internal, dtype=torch.int64),
+            "gauss_next": gauss_next,
+        },
         "batches": generator.get_state(),
     }
 
@@ -73,14 +82,13 @@ def load_train_state(path: Path, map_location: Any = None) -> dict[str, Any]:
     A state written before format 1 holds pickled numpy/Python objects: it is refused when
     ``STABLEWM_REFUSE_PICKLE=1``, else loaded with a warning naming the file (as ``*_object.ckpt``).
     """
-    import os
     import pickle
     import warnings
 
     import torch
 
     from ..errors import CheckpointError
-    from ..planning.auto import PICKLE_ENV
+    from ..wm.trust import PICKLE_ENV, pickles_refused
 
     try:
         return torch.load(path, map_location=map_location, weights_only=True)
@@ -91,7 +99,7 @@ def load_train_state(path: Path, map_location: Any = None) -> dict[str, Any]:
             f"Resuming requires a readable {path.name}, got a damaged or truncated {path} ({type(exc).__name__}: "
             f"{str(exc).splitlines()[0][:160] if str(exc) else ''}); start the run again under another name"
         ) from exc
-    if os.environ.get(PICKLE_ENV, "").strip().lower() in ("1", "true", "yes"):
+    if pickles_refused():
         raise CheckpointError(
             f"Resuming refuses the pickled training state {path} ({PICKLE_ENV} is set): it was written by an older "
             "version; unset the variable to load it if you trust the file"
@@ -168,10 +176,10 @@ def plot_losses(records: list[dict[str, Any]], path: Path, title: str) -> Path |
         for key in sorted({k for r in train for k in r if k.startswith("train/") and k.endswith("_loss")}):
             values = [(r["step"], r[key]) for r in train if key in r and r[key] > 0]
             if values:
-                ax.plot(*zip(*values), label=key[len("train/") :], linewidth=0.8, alpha=0.7)
+                ax.plot(*zip(*values, strict=False), label=key[len("train/") :], linewidth=0.8, alpha=0.7)
         val = [(r["step"], r["val/loss"]) for r in records if "val/loss" in r]
         if val:
-            ax.plot(*zip(*val), "o-", label="val loss", color="#c4703a")
+            ax.plot(*zip(*val, strict=False), "o-", label="val loss", color="#c4703a")
         if all(r["train/loss"] > 0 for r in train):
             ax.set_yscale("log")
         ax.set_xlabel("step")

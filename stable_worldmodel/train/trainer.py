@@ -22,8 +22,8 @@ from typing import Any
 import torch
 
 from ..errors import ConfigError
-from ..wm.base import HasValidationLoss
 from ..wm import utils as wmu
+from ..wm.base import HasValidationLoss
 from . import distributed
 from .distributed import DistInfo
 from .run import STATE_NAME, TRAIN_STATE_FORMAT, MetricsLog, plot_losses, rng_state, set_rng_state
@@ -48,7 +48,9 @@ def resolve_device(device: str | torch.device = "auto") -> torch.device:
     except (RuntimeError, TypeError) as exc:
         raise ConfigError(f"Training requires a device among auto, cpu, cuda, cuda:N, mps, got {device!r}") from exc
     if dev.type == "cuda" and not torch.cuda.is_available():
-        raise ConfigError(f"Training requires an available device, got {device!r} but torch sees no CUDA GPU; use --device auto or cpu")
+        raise ConfigError(
+            f"Training requires an available device, got {device!r} but torch sees no CUDA GPU; use --device auto or cpu"
+        )
     if dev.type == "mps" and not (getattr(torch.backends, "mps", None) and torch.backends.mps.is_available()):
         raise ConfigError(f"Training requires an available device, got {device!r} but MPS is not available")
     return dev
@@ -61,10 +63,20 @@ def _param_groups(model: torch.nn.Module, lr: float, weight_decay: float, encode
         if not p.requires_grad:
             continue
         is_encoder = name.startswith("encoder.")
-        decay = p.ndim >= 2 and "pos_embedding" not in name and "position_embeddings" not in name and "cls_token" not in name
+        decay = (
+            p.ndim >= 2
+            and "pos_embedding" not in name
+            and "position_embeddings" not in name
+            and "cls_token" not in name
+        )
         groups.setdefault((is_encoder, decay), []).append(p)
     return [
-        {"params": ps, "lr": lr * (encoder_lr_scale if enc else 1.0), "weight_decay": weight_decay if decay else 0.0, "name": f"{'encoder' if enc else 'model'}/{'decay' if decay else 'no_decay'}"}
+        {
+            "params": ps,
+            "lr": lr * (encoder_lr_scale if enc else 1.0),
+            "weight_decay": weight_decay if decay else 0.0,
+            "name": f"{'encoder' if enc else 'model'}/{'decay' if decay else 'no_decay'}",
+        }
         for (enc, decay), ps in sorted(groups.items())
     ]
 
@@ -113,10 +125,27 @@ class Trainer:
     of the global batch under DDP; only process 0 logs, validates and saves.
     """
 
-    def __init__(self, model: torch.nn.Module, data: Any, cfg: Any, *, folder: Path, run: str, device: torch.device,
-                 precision: str = "32", seed: int = 0, steps: int, log_every: int = 10, val_every: int = 0,
-                 ckpt_every: int = 0, val_samples: int = 512, progress: bool = True, config_tree: dict, protocol: dict,
-                 dist: DistInfo | None = None):
+    def __init__(
+        self,
+        model: torch.nn.Module,
+        data: Any,
+        cfg: Any,
+        *,
+        folder: Path,
+        run: str,
+        device: torch.device,
+        precision: str = "32",
+        seed: int = 0,
+        steps: int,
+        log_every: int = 10,
+        val_every: int = 0,
+        ckpt_every: int = 0,
+        val_samples: int = 512,
+        progress: bool = True,
+        config_tree: dict,
+        protocol: dict,
+        dist: DistInfo | None = None,
+    ):
         if precision not in PRECISIONS:
             raise ConfigError(f"Training requires precision in {PRECISIONS}, got {precision!r}")
         if precision == "16" and device.type != "cuda":
@@ -126,7 +155,9 @@ class Trainer:
         self.steps, self.log_every, self.val_every, self.ckpt_every = steps, log_every, val_every, ckpt_every
         self.val_samples, self.progress = val_samples, progress
         self.config_tree, self.protocol = config_tree, protocol
-        self.optimizer = torch.optim.AdamW(_param_groups(model, cfg.lr, cfg.weight_decay, cfg.encoder_lr_scale), lr=cfg.lr)
+        self.optimizer = torch.optim.AdamW(
+            _param_groups(model, cfg.lr, cfg.weight_decay, cfg.encoder_lr_scale), lr=cfg.lr
+        )
         self.scheduler = torch.optim.lr_scheduler.LambdaLR(self.optimizer, _schedule(cfg.warmup_steps, steps))
         self.scaler = torch.amp.GradScaler(device.type, enabled=precision == "16")
         self.generator = torch.Generator().manual_seed(seed)
@@ -136,9 +167,13 @@ class Trainer:
             from torch.nn.parallel import DistributedDataParallel
 
             distributed.global_batch_norm(self.model)
-            self.ddp = DistributedDataParallel(_Loss(self.model), device_ids=[device] if device.type == "cuda" else None)
+            self.ddp = DistributedDataParallel(
+                _Loss(self.model), device_ids=[device] if device.type == "cuda" else None
+            )
         self.step = 0
-        self.window: list[Any] = []  # train losses (floats or 0-d tensors) since the last log (checkpointed, for exact resume)
+        self.window: list[
+            Any
+        ] = []  # train losses (floats or 0-d tensors) since the last log (checkpointed, for exact resume)
         self._collapse_warned = False
 
     # -- state ---------------------------------------------------------------------------------
@@ -171,7 +206,7 @@ class Trainer:
         if not self.dist.is_main:
             return
         protocol = {**self.protocol, "steps_done": self.step}
-        for where in ([self.folder] + ([self.folder / f"step_{self.step:06d}"] if not final else [])):
+        for where in [self.folder] + ([self.folder / f"step_{self.step:06d}"] if not final else []):
             where.mkdir(parents=True, exist_ok=True)
             wmu.write_checkpoint(self.model, where, self.config_tree, protocol)
         wmu._atomic_write(self.folder / STATE_NAME, wmu._write_bytes(wmu.serialize_state(self.state_dict())))
@@ -232,8 +267,14 @@ class Trainer:
         last_loss = next((r["train/loss"] for r in reversed(logged) if "train/loss" in r), float("nan"))
         val_loss = next((r["val/loss"] for r in logged if "val/loss" in r and r.get("step") == self.step), None)
         main = self.dist.is_main
-        bar = tqdm(total=self.steps, initial=self.step, desc=f"train {self.run}", unit="step",
-                   disable=not (self.progress and main), dynamic_ncols=True)
+        bar = tqdm(
+            total=self.steps,
+            initial=self.step,
+            desc=f"train {self.run}",
+            unit="step",
+            disable=not (self.progress and main),
+            dynamic_ncols=True,
+        )
         try:
             while self.step < self.steps:
                 out = self._train_step_loss(bs)
@@ -258,8 +299,19 @@ class Trainer:
                             f"Training diverged: loss {losses} in the {len(losses)} steps up to step {self.step}; lower --lr or use --precision 32"
                         )
                     rate = (self.step - start_step) * bs / max(time.perf_counter() - start, 1e-9)
-                    record = {"step": self.step, "train/loss": last_loss, "lr": self.scheduler.get_last_lr()[0], "samples_per_s": rate}
-                    record.update({f"train/{k}": float(v.detach()) for k, v in out.items() if k != "loss" and torch.is_tensor(v) and v.ndim == 0})
+                    record = {
+                        "step": self.step,
+                        "train/loss": last_loss,
+                        "lr": self.scheduler.get_last_lr()[0],
+                        "samples_per_s": rate,
+                    }
+                    record.update(
+                        {
+                            f"train/{k}": float(v.detach())
+                            for k, v in out.items()
+                            if k != "loss" and torch.is_tensor(v) and v.ndim == 0
+                        }
+                    )
                     if "emb" in out:
                         record.update(self._monitor(out["emb"]))
                     if self.val_every and (self.step % self.val_every == 0 or self.step == self.steps):
@@ -283,6 +335,10 @@ class Trainer:
         log.close()
         records = log.read()
         if main:
-            plot_losses(records, self.folder / "loss.png", f"{self.run}: {self.protocol.get('model')} on {self.protocol.get('dataset')}")
+            plot_losses(
+                records,
+                self.folder / "loss.png",
+                f"{self.run}: {self.protocol.get('model')} on {self.protocol.get('dataset')}",
+            )
         rate = (self.step - start_step) * bs / max(seconds, 1e-9)
         return TrainResult(self.run, self.folder, self.step, last_loss, val_loss, seconds, rate, records)

@@ -85,7 +85,12 @@ _SIZES = {
     "dino_vits16": {"hidden_size": 384, "num_attention_heads": 6, "intermediate_size": 1536},
     "dino_vits8": {"hidden_size": 384, "num_attention_heads": 6, "intermediate_size": 1536, "patch_size": 8},
     "dino_vitb8": {"patch_size": 8},
-    "vit_large_patch16": {"hidden_size": 1024, "num_hidden_layers": 24, "num_attention_heads": 16, "intermediate_size": 4096},
+    "vit_large_patch16": {
+        "hidden_size": 1024,
+        "num_hidden_layers": 24,
+        "num_attention_heads": 16,
+        "intermediate_size": 4096,
+    },
     "resnet_101": {"depths": [3, 4, 23, 3]},
 }
 #: family -> (transformers config class, model class) for random initialisation
@@ -163,7 +168,9 @@ def _from_file(transformers: Any, file: Path, family: str, overrides: dict[str, 
     import torch
 
     if not (file.parent / "config.json").is_file():
-        raise ConfigError(f"create_backbone requires a config.json beside the weights file {file}, got none in {file.parent}")
+        raise ConfigError(
+            f"create_backbone requires a config.json beside the weights file {file}, got none in {file.parent}"
+        )
     model_class = _model_class(transformers, family)
     if file.name in _HF_WEIGHTS:
         return model_class.from_pretrained(str(file.parent), local_files_only=True, **overrides)
@@ -233,7 +240,9 @@ def create_backbone(
     if path is not None:
         where = Path(path).expanduser()
         if not where.exists():
-            raise ConfigError(f"create_backbone({alias!r}) requires an existing folder or weights file, got path={str(path)!r}")
+            raise ConfigError(
+                f"create_backbone({alias!r}) requires an existing folder or weights file, got path={str(path)!r}"
+            )
     else:
         where = backbone_dir(alias, cache_dir)
     if not pretrained:
@@ -245,5 +254,7 @@ def create_backbone(
         return _post_init(_from_file(transformers, where, spec.family, config_overrides), spec.family)
     if not (where / "config.json").is_file():
         raise _missing_weights(alias, where, spec)
-    model = _model_class(transformers, spec.family).from_pretrained(str(where), local_files_only=True, **config_overrides)
+    model = _model_class(transformers, spec.family).from_pretrained(
+        str(where), local_files_only=True, **config_overrides
+    )
     return _post_init(model, spec.family)

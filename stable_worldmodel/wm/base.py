@@ -128,7 +128,9 @@ class WorldModelConfig:
         names = {f.name for f in dataclasses.fields(cls)}
         for key in overrides:
             if key not in names:
-                raise ConfigError(f"{cls.__name__} has no field {key!r}.{did_you_mean(key, names)} Fields: {', '.join(sorted(names))}")
+                raise ConfigError(
+                    f"{cls.__name__} has no field {key!r}.{did_you_mean(key, names)} Fields: {', '.join(sorted(names))}"
+                )
         return cls(**{**cls.presets[preset], **overrides})
 
     @classmethod

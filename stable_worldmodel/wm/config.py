@@ -46,7 +46,6 @@ VIT_SIZES = {
 }
 
 
-
 def parse_override(text: str) -> tuple[str, Any]:
     """``"KEY=VALUE"`` -> ``(KEY, VALUE)``, a config override as ``swm train --set`` takes it: the
     value read as JSON when it parses (``2``, ``true``, ``[1, 2]``), else kept as a string."""
@@ -54,11 +53,14 @@ def parse_override(text: str) -> tuple[str, Any]:
 
     key, sep, raw = text.partition("=")
     if not sep or not key.strip():
-        raise ConfigError(f"A config override requires KEY=VALUE (a config field of the model, e.g. proprio_dim=2), got {text!r}")
+        raise ConfigError(
+            f"A config override requires KEY=VALUE (a config field of the model, e.g. proprio_dim=2), got {text!r}"
+        )
     try:
         return key.strip(), json.loads(raw)
     except json.JSONDecodeError:
         return key.strip(), raw
+
 
 @dataclass
 class PredictorConfig(WorldModelConfig):
@@ -81,8 +83,14 @@ class PredictorConfig(WorldModelConfig):
 
     def transformer_sizes(self) -> dict[str, Any]:
         """The predictor transformer's size arguments (``depth``, ``heads``, ``mlp_dim``, ``dim_head``, dropouts)."""
-        return {"depth": self.depth, "heads": self.heads, "mlp_dim": self.mlp_dim, "dim_head": self.dim_head,
-                "dropout": self.dropout, "emb_dropout": 0.0}
+        return {
+            "depth": self.depth,
+            "heads": self.heads,
+            "mlp_dim": self.mlp_dim,
+            "dim_head": self.dim_head,
+            "dropout": self.dropout,
+            "emb_dropout": 0.0,
+        }
 
 
 @dataclass
@@ -102,11 +110,15 @@ class ImageEncoderConfig(WorldModelConfig):
         super().__post_init__()
         name = type(self).__name__
         if self.encoder not in ("cnn", "vit"):
-            raise ConfigError(f"{name} requires encoder 'cnn' or 'vit', got {self.encoder!r}.{did_you_mean(self.encoder, ['cnn', 'vit'])}")
+            raise ConfigError(
+                f"{name} requires encoder 'cnn' or 'vit', got {self.encoder!r}.{did_you_mean(self.encoder, ['cnn', 'vit'])}"
+            )
         for key in ("embed_dim", "cnn_width", "patch_size"):
             check_positive_int(name, key, getattr(self, key))
         if self.encoder == "vit" and self.vit_size not in VIT_SIZES:
-            raise ConfigError(f"{name} requires vit_size in {sorted(VIT_SIZES)}, got {self.vit_size!r}.{did_you_mean(self.vit_size, VIT_SIZES)}")
+            raise ConfigError(
+                f"{name} requires vit_size in {sorted(VIT_SIZES)}, got {self.vit_size!r}.{did_you_mean(self.vit_size, VIT_SIZES)}"
+            )
 
     def encoder_tree(self) -> dict[str, Any]:
         if self.encoder == "vit":
@@ -119,7 +131,12 @@ class ImageEncoderConfig(WorldModelConfig):
                 "use_mask_token": False,
                 **self.vit_overrides,
             }
-        return {"_target_": f"{_P}.encoders.ConvEncoder", "image_size": self.image_size, "width": self.cnn_width, "hidden_size": self.encoder_dim}
+        return {
+            "_target_": f"{_P}.encoders.ConvEncoder",
+            "image_size": self.image_size,
+            "width": self.cnn_width,
+            "hidden_size": self.encoder_dim,
+        }
 
     @property
     def encoder_dim(self) -> int:
@@ -167,13 +184,19 @@ class JEPAConfig(ImageEncoderConfig, PredictorConfig):
                 "output_dim": d,
                 **self.transformer_sizes(),
             },
-            "action_encoder": {"_target_": f"{_P}.lewm.module.Embedder", "input_dim": self.frameskip * int(action_dim), "emb_dim": d},
+            "action_encoder": {
+                "_target_": f"{_P}.lewm.module.Embedder",
+                "input_dim": self.frameskip * int(action_dim),
+                "emb_dim": d,
+            },
         }
         if self.projector_hidden:
             tree["projector"] = self._mlp(enc, d, self.projector_hidden)
             tree["pred_proj"] = self._mlp(d, d, self.projector_hidden)
         elif enc != d:
-            raise ConfigError(f"{type(self).__name__} requires projector_hidden > 0 when the encoder width {enc} != embed_dim {d}")
+            raise ConfigError(
+                f"{type(self).__name__} requires projector_hidden > 0 when the encoder width {enc} != embed_dim {d}"
+            )
         tree.update(self.model_kwargs(action_dim))
         return tree
 

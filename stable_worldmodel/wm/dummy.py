@@ -65,7 +65,9 @@ class DummyWorldModel(nn.Module):
         if single:
             candidates = candidates.unsqueeze(1)
         if candidates.ndim != 4:
-            raise SpaceError(f"DummyWorldModel.rollout requires candidates (B, S, H, A) or (B, H, A), got shape {tuple(candidates.shape)}")
+            raise SpaceError(
+                f"DummyWorldModel.rollout requires candidates (B, S, H, A) or (B, H, A), got shape {tuple(candidates.shape)}"
+            )
         b, s, h, _ = candidates.shape
         z = info.get("emb")
         if z is None:
@@ -97,5 +99,7 @@ class DummyWorldModel(nn.Module):
         emb = self._embed(batch[keys.PIXELS])  # (B, T, 10)
         action = torch.nan_to_num(batch[keys.ACTION], 0.0).to(emb.dtype)
         pred = self.predictor(torch.cat([emb[:, :-1], action[:, :-1]], dim=-1))
-        loss = (pred - emb[:, 1:]).square().mean()  # no stop-gradient: with one, AdamW makes the embeddings (and the loss) grow
+        loss = (
+            (pred - emb[:, 1:]).square().mean()
+        )  # no stop-gradient: with one, AdamW makes the embeddings (and the loss) grow
         return {"loss": loss, "pred_loss": loss, "emb": emb}

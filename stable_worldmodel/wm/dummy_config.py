@@ -19,4 +19,8 @@ class DummyConfig(WorldModelConfig):
     presets: ClassVar[dict[str, dict[str, Any]]] = {"tiny": {"image_size": 16, "history_size": 1}}
 
     def target_tree(self, action_dim: int) -> dict[str, Any]:
-        return {"_target_": self.target, "image_shape": [3, self.image_size, self.image_size], "action_dim": self.frameskip * int(action_dim)}
+        return {
+            "_target_": self.target,
+            "image_shape": [3, self.image_size, self.image_size],
+            "action_dim": self.frameskip * int(action_dim),
+        }

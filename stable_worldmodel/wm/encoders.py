@@ -18,11 +18,10 @@ from torch import nn
 
 from .._optional import require
 from ..errors import ConfigError, SpaceError, did_you_mean
-from .trust import checkpoint_factory
 from .config import VIT_SIZES
+from .trust import checkpoint_factory
 
 __all__ = ["VIT_SIZES", "ConvEncoder", "EncoderOutput", "vit_hf"]
-
 
 
 @checkpoint_factory
@@ -53,7 +52,9 @@ def vit_hf(
     params["intermediate_size"] = 4 * params["hidden_size"]
     params.update(image_size=int(image_size), patch_size=int(patch_size))
     params.update(vit_config_overrides)
-    model = transformers.ViTModel(transformers.ViTConfig(**params), add_pooling_layer=False, use_mask_token=use_mask_token)
+    model = transformers.ViTModel(
+        transformers.ViTConfig(**params), add_pooling_layer=False, use_mask_token=use_mask_token
+    )
     model.config.interpolate_pos_encoding = True
     return model
 
@@ -78,12 +79,19 @@ class ConvEncoder(nn.Module):
 
     def __init__(self, image_size: int = 64, in_channels: int = 3, width: int = 16, hidden_size: int = 64):
         super().__init__()
-        for name, value in (("image_size", image_size), ("in_channels", in_channels), ("width", width), ("hidden_size", hidden_size)):
+        for name, value in (
+            ("image_size", image_size),
+            ("in_channels", in_channels),
+            ("width", width),
+            ("hidden_size", hidden_size),
+        ):
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ConfigError(f"ConvEncoder requires {name} to be a positive int, got {value!r}")
         if image_size < 8:
             raise ConfigError(f"ConvEncoder requires image_size >= 8, got {image_size}")
-        self.config = SimpleNamespace(image_size=image_size, hidden_size=hidden_size, num_channels=in_channels, width=width)
+        self.config = SimpleNamespace(
+            image_size=image_size, hidden_size=hidden_size, num_channels=in_channels, width=width
+        )
         layers: list[nn.Module] = []
         channels, side, i = in_channels, image_size, 0
         while side > 4:

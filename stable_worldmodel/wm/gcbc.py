@@ -35,10 +35,24 @@ class Predictor(_Positional):
     query (``out_token``) over every token, then ``action_proj``.
     """
 
-    def __init__(self, *, num_patches: int, num_frames: int, dim: int, depth: int, heads: int, mlp_dim: int, action_dim: int,
-                 dim_head: int = 64, dropout: float = 0.0, emb_dropout: float = 0.0):
+    def __init__(
+        self,
+        *,
+        num_patches: int,
+        num_frames: int,
+        dim: int,
+        depth: int,
+        heads: int,
+        mlp_dim: int,
+        action_dim: int,
+        dim_head: int = 64,
+        dropout: float = 0.0,
+        emb_dropout: float = 0.0,
+    ):
         super().__init__(num_patches, num_frames, dim, emb_dropout)
-        self.transformer = Transformer(dim, depth, heads, dim_head, mlp_dim, dropout, num_patches, num_frames, causal=False, pool_type="token")
+        self.transformer = Transformer(
+            dim, depth, heads, dim_head, mlp_dim, dropout, num_patches, num_frames, causal=False, pool_type="token"
+        )
         self.action_proj = nn.Linear(dim, action_dim)
 
     def forward(self, x: torch.Tensor, g: torch.Tensor) -> torch.Tensor:
@@ -54,8 +68,15 @@ class GCBC(GoalImageEncoding, nn.Module):
 
     detach_embeddings = True
 
-    def __init__(self, encoder: nn.Module, predictor: nn.Module, extra_encoders: Mapping[str, nn.Module] | None = None,
-                 history_size: int = 3, num_pred: int = 1, interpolate_pos_encoding: bool = True):
+    def __init__(
+        self,
+        encoder: nn.Module,
+        predictor: nn.Module,
+        extra_encoders: Mapping[str, nn.Module] | None = None,
+        history_size: int = 3,
+        num_pred: int = 1,
+        interpolate_pos_encoding: bool = True,
+    ):
         super().__init__()
         self.backbone = encoder
         self.predictor = predictor
@@ -85,7 +106,9 @@ class GCBC(GoalImageEncoding, nn.Module):
         pixels = require(batch, keys.PIXELS, who)
         h = self.history_size
         if pixels.ndim != 5 or pixels.shape[1] < h:
-            raise ConfigError(f"{who} requires pixels (B, T, C, h, w) with T >= history_size = {h}, got {tuple(pixels.shape)}")
+            raise ConfigError(
+                f"{who} requires pixels (B, T, C, h, w) with T >= history_size = {h}, got {tuple(pixels.shape)}"
+            )
         require(batch, GOAL_PIXELS, who)
         target = torch.nan_to_num(require(batch, keys.ACTION, who)[:, h - 1 : h].float(), 0.0)
         info = self.encode(dict(batch), pixels_key=keys.PIXELS, target="embed")

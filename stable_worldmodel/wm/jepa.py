@@ -153,7 +153,9 @@ class JEPA(nn.Module):
         ctx = self._context(info, keys.PIXELS, EMB, b, None if squeeze else s)  # (B, T, D)
         t = ctx.shape[1]
         if h < t:
-            raise ConfigError(f"{type(self).__name__}.rollout requires at least {t} actions (one per context frame), got {h}")
+            raise ConfigError(
+                f"{type(self).__name__}.rollout requires at least {t} actions (one per context frame), got {h}"
+            )
         hs = int(history_size or self.history_size)
         n = b * s
         act_emb = self.action_encoder(cand.reshape(n, h, -1))  # (BS, H, D)

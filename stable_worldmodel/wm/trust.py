@@ -28,14 +28,21 @@ import os
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
-from ..errors import ConfigError, UntrustedCheckpointError, UnknownNameError
+from ..errors import ConfigError, UnknownNameError, UntrustedCheckpointError
 
-__all__ = ["TRUSTED_ENV", "checkpoint_factory", "resolve_targets", "trusted_prefixes"]
+__all__ = ["PICKLE_ENV", "TRUSTED_ENV", "checkpoint_factory", "pickles_refused", "resolve_targets", "trusted_prefixes"]
 
 TRUSTED_ENV = "STABLEWM_TRUSTED_TARGETS"
+#: set to 1 to refuse every pickle (``*_object.ckpt`` modules, train states written before format 1)
+PICKLE_ENV = "STABLEWM_REFUSE_PICKLE"
 _OURS, _TORCH_NN, _TRANSFORMERS = "stable_worldmodel.", "torch.nn.", "transformers."
 BUILTIN_PREFIXES = (_OURS, _TORCH_NN, _TRANSFORMERS)
 _FACTORY_FLAG = "__swm_checkpoint_factory__"
+
+
+def pickles_refused() -> bool:
+    """Whether ``$STABLEWM_REFUSE_PICKLE`` asks to refuse every pickled file."""
+    return os.environ.get(PICKLE_ENV, "").strip().lower() in ("1", "true", "yes")
 
 
 def checkpoint_factory(fn: Callable) -> Callable:
@@ -98,12 +105,18 @@ class _Gate:
     def check(self, node: Mapping, path: tuple) -> None:
         target = node["_target_"]
         if not isinstance(target, str) or not target:
-            raise ConfigError(f"{self.source} requires _target_ to be a dotted name at key {_key_path(path)}, got {target!r}")
+            raise ConfigError(
+                f"{self.source} requires _target_ to be a dotted name at key {_key_path(path)}, got {target!r}"
+            )
         partial = node.get("_partial_", False)
         if not isinstance(partial, bool):
-            raise ConfigError(f"{self.source} requires _partial_ to be true or false at key {_key_path(path)}, got {partial!r}")
+            raise ConfigError(
+                f"{self.source} requires _partial_ to be true or false at key {_key_path(path)}, got {partial!r}"
+            )
         if not isinstance(node.get("_args_", []), (list, tuple)):
-            raise ConfigError(f"{self.source} requires _args_ to be a list at key {_key_path(path)}, got {node['_args_']!r}")
+            raise ConfigError(
+                f"{self.source} requires _args_ to be a list at key {_key_path(path)}, got {node['_args_']!r}"
+            )
         if target not in self.resolved:
             self.resolved[target] = self.resolve(target, path)
 
@@ -115,7 +128,9 @@ class _Gate:
         user = next((p for p in self.trusted if name.startswith(p)), None)
         builtin = next((p for p in BUILTIN_PREFIXES if name.startswith(p)), None)
         if user is None and builtin is None:
-            raise self.refuse(target, path, "outside the trusted prefixes " + ", ".join(BUILTIN_PREFIXES + self.trusted))
+            raise self.refuse(
+                target, path, "outside the trusted prefixes " + ", ".join(BUILTIN_PREFIXES + self.trusted)
+            )
         obj = _locate(name, target)
         if user is not None:
             ok = _defined_under(obj, user.split(".")[0] + ".") and callable(obj)
@@ -166,14 +181,21 @@ def _builtin_allows(prefix: str, name: str, obj: Any) -> bool:
         if is_module_class:
             return _defined_under(obj, "torch.")
         where, _, leaf = name.rpartition(".")
-        return where in _TORCH_FUNCTION_MODULES and inspect.isroutine(obj) and _defined_under(obj, "torch") and not leaf.startswith("_")
+        return (
+            where in _TORCH_FUNCTION_MODULES
+            and inspect.isroutine(obj)
+            and _defined_under(obj, "torch")
+            and not leaf.startswith("_")
+        )
     if prefix == _TRANSFORMERS:
         if not (inspect.isclass(obj) and _defined_under(obj, _TRANSFORMERS)):
             return False
         import transformers
 
         bases = tuple(
-            b for b in (getattr(transformers, "PreTrainedModel", None), getattr(transformers, "PretrainedConfig", None)) if b
+            b
+            for b in (getattr(transformers, "PreTrainedModel", None), getattr(transformers, "PretrainedConfig", None))
+            if b
         )
         return issubclass(obj, bases)
     return False

@@ -183,7 +183,11 @@ def _write_json(path: Path, data: Any) -> None:
 
 
 def write_checkpoint(
-    model: Any, folder: Path, config: Mapping[str, Any] | None, protocol: Mapping[str, Any] | None = None, filename: str = WEIGHTS_NAME
+    model: Any,
+    folder: Path,
+    config: Mapping[str, Any] | None,
+    protocol: Mapping[str, Any] | None = None,
+    filename: str = WEIGHTS_NAME,
 ) -> Path:
     """Write ``folder/<filename>`` (the state dict), ``config.json`` and ``protocol.json`` (each
     when given), every file through a temporary name, fsynced, then renamed. The protocol records
@@ -196,7 +200,10 @@ def write_checkpoint(
     if config is not None:
         _write_json(folder / CONFIG_NAME, _json_ready(config))
     if protocol is not None:
-        _write_json(folder / PROTOCOL_NAME, {**protocol, "weights_file": filename, "weights_sha256": hashlib.sha256(data).hexdigest()})
+        _write_json(
+            folder / PROTOCOL_NAME,
+            {**protocol, "weights_file": filename, "weights_sha256": hashlib.sha256(data).hexdigest()},
+        )
     return path
 
 
@@ -217,7 +224,9 @@ def save_pretrained(
     folder = checkpoint_root(cache_dir) / run_name
     path = write_checkpoint(model, folder, None, filename=filename)
     if config is None:
-        logger.warning("save_pretrained(%r) got no config: load_pretrained will not be able to rebuild the model", run_name)
+        logger.warning(
+            "save_pretrained(%r) got no config: load_pretrained will not be able to rebuild the model", run_name
+        )
         return path
     config = _json_ready(config)
     if config_key is not None and config_key in config:
@@ -386,7 +395,11 @@ def _read_weights(weights: Path, protocol: Mapping[str, Any]) -> Mapping[str, An
     if not isinstance(state, Mapping):
         raise CheckpointError(f"load_pretrained requires a state_dict in {weights}, got {type(state).__name__}")
     for key, value in state.items():
-        if torch.is_tensor(value) and (value.is_floating_point() or value.is_complex()) and not bool(torch.isfinite(value).all()):
+        if (
+            torch.is_tensor(value)
+            and (value.is_floating_point() or value.is_complex())
+            and not bool(torch.isfinite(value).all())
+        ):
             bad = int((~torch.isfinite(value)).sum())
             raise CheckpointError(
                 f"load_pretrained: {weights} holds non-finite weights: tensor {key!r} has {bad} NaN/inf value(s) "
@@ -419,7 +432,9 @@ def load_checkpoint(
     try:
         missing, unexpected = model.load_state_dict(state, strict=False)
     except RuntimeError as exc:  # same keys, other shapes: the config does not describe these weights
-        raise CheckpointError(f"load_pretrained: the weights {weights} do not fit the model of {CONFIG_NAME} beside them: {exc}") from exc
+        raise CheckpointError(
+            f"load_pretrained: the weights {weights} do not fit the model of {CONFIG_NAME} beside them: {exc}"
+        ) from exc
     if missing or unexpected:
         raise CheckpointError(
             f"load_pretrained: the weights {weights} do not fit the model of {CONFIG_NAME}: "

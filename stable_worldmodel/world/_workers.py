@@ -307,7 +307,7 @@ class WorkerPool:
         left in shared memory. Does nothing in a forked copy of the owner."""
         if os.getpid() != self.owner:
             return
-        for conn, proc in zip(self.conns, self.procs):
+        for conn, proc in zip(self.conns, self.procs, strict=False):
             if not graceful or not proc.is_alive():
                 continue
             try:

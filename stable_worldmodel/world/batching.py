@@ -50,14 +50,18 @@ def concat_batches(batches: Sequence[dict[str, np.ndarray]]) -> dict[str, np.nda
     for name in names:
         like = next(b[name] for b in batches if name in b)
         parts = [
-            b[name] if name in b else np.broadcast_to(_placeholder(like[0]), (len(next(iter(b.values()))),) + like.shape[1:])
+            b[name]
+            if name in b
+            else np.broadcast_to(_placeholder(like[0]), (len(next(iter(b.values()))),) + like.shape[1:])
             for b in batches
         ]
         out[name] = np.concatenate(parts)
     return out
 
 
-def set_rows(target: dict[str, np.ndarray], rows: Sequence[int], update: dict[str, np.ndarray], n: int) -> dict[str, np.ndarray]:
+def set_rows(
+    target: dict[str, np.ndarray], rows: Sequence[int], update: dict[str, np.ndarray], n: int
+) -> dict[str, np.ndarray]:
     """Return a copy of ``target`` (batched over ``n`` envs) whose ``rows`` come from ``update``.
 
     Arrays are copied, never written in place, so a batch a caller kept stays as it was.

@@ -25,7 +25,9 @@ def check_seed(owner: str, seed: Any) -> int | None:
     if seed is None:
         return None
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)):
-        raise ConfigError(f"{owner} requires seed to be an int in [0, 2**32) or None, got {seed!r} ({type(seed).__name__})")
+        raise ConfigError(
+            f"{owner} requires seed to be an int in [0, 2**32) or None, got {seed!r} ({type(seed).__name__})"
+        )
     if not 0 <= int(seed) < SEED_LIMIT:
         raise ConfigError(f"{owner} requires seed to be an int in [0, 2**32) or None, got {seed!r}")
     return int(seed)
@@ -95,7 +97,9 @@ def check_reset_options(options: Any, n: int, observation_space: Any = None) -> 
     elif isinstance(options, Sequence) and not isinstance(options, (str, bytes)):
         per_env = list(options)
         if len(per_env) != n:
-            raise ConfigError(f"World.reset requires one options dict per env ({n}) when given a list, got {len(per_env)}")
+            raise ConfigError(
+                f"World.reset requires one options dict per env ({n}) when given a list, got {len(per_env)}"
+            )
     else:
         raise ConfigError(
             f"World.reset requires options to be a dict (or one dict per env), got {options!r}; "
@@ -121,8 +125,12 @@ def _check_options(opts: Mapping[str, Any], state_space: Any) -> None:
             raise ConfigError(
                 f"reset option 'variation' requires a list of factor names, got the string {variation!r}; write [{variation!r}]"
             )
-        if not isinstance(variation, (Sequence, np.ndarray, set, frozenset)) or not all(isinstance(v, str) for v in variation):
-            raise ConfigError(f"reset option 'variation' requires a list of factor names (or ['all']), got {variation!r}")
+        if not isinstance(variation, (Sequence, np.ndarray, set, frozenset)) or not all(
+            isinstance(v, str) for v in variation
+        ):
+            raise ConfigError(
+                f"reset option 'variation' requires a list of factor names (or ['all']), got {variation!r}"
+            )
     values = opts.get(keys.VARIATION_VALUES)
     if values is not None and not isinstance(values, Mapping):
         raise ConfigError(

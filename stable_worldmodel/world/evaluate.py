@@ -82,7 +82,9 @@ def evaluate(
     frames: list[list[np.ndarray]] | None = None
     if video is not None:
         if keys.PIXELS not in world.infos:
-            raise ConfigError(f"World.evaluate(video=...) requires {keys.PIXELS!r} in the infos, got {sorted(world.infos)}")
+            raise ConfigError(
+                f"World.evaluate(video=...) requires {keys.PIXELS!r} in the infos, got {sorted(world.infos)}"
+            )
         frames = [[np.asarray(world.infos[keys.PIXELS])[i, -1].copy()] for i in range(n)]
     next_episode = first
     done_count = 0

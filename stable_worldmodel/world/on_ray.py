@@ -53,12 +53,18 @@ def ray_temp_dir(cache_dir: str | os.PathLike | None = None) -> Path:
     return Path(tempfile.gettempdir()) / f"swm-ray-{digest}"
 
 
-def init_ray(address: str | None = None, *, num_cpus: int | None = None, cache_dir: str | os.PathLike | None = None) -> Any:
+def init_ray(
+    address: str | None = None, *, num_cpus: int | None = None, cache_dir: str | os.PathLike | None = None
+) -> Any:
     """Connect to the Ray cluster at ``address``, or start a private local one (see the module doc).
 
     Does nothing when Ray is already initialised in this process. Returns the ``ray`` module.
     """
-    for key, value in (("RAY_USAGE_STATS_ENABLED", "0"), ("RAY_AUTH_MODE", "disabled"), ("RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER", "0")):
+    for key, value in (
+        ("RAY_USAGE_STATS_ENABLED", "0"),
+        ("RAY_AUTH_MODE", "disabled"),
+        ("RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER", "0"),
+    ):
         os.environ.setdefault(key, value)
     from .._optional import require
 
@@ -80,8 +86,12 @@ def init_ray(address: str | None = None, *, num_cpus: int | None = None, cache_d
     temp = ray_temp_dir(cache_dir)
     temp.mkdir(parents=True, exist_ok=True)
     ray.init(
-        num_cpus=num_cpus, include_dashboard=False, _temp_dir=str(temp), _node_ip_address="127.0.0.1",
-        log_to_driver=False, configure_logging=False,
+        num_cpus=num_cpus,
+        include_dashboard=False,
+        _temp_dir=str(temp),
+        _node_ip_address="127.0.0.1",
+        log_to_driver=False,
+        configure_logging=False,
     )
     return ray
 
@@ -106,7 +116,7 @@ def shard_plan(episodes: int, seed: int, shards: int) -> list[dict[str, int]]:
     """Split ``episodes`` (seeds ``seed ..``) into ``shards`` contiguous, near-equal seed ranges."""
     sizes = [len(c) for c in np.array_split(np.arange(episodes), min(shards, episodes))]
     starts = np.cumsum([0, *sizes[:-1]])
-    return [{"shard": k, "seed": int(seed + s), "episodes": int(n)} for k, (s, n) in enumerate(zip(starts, sizes))]
+    return [{"shard": k, "seed": int(seed + s), "episodes": int(n)} for k, (s, n) in enumerate(zip(starts, sizes, strict=False))]
 
 
 def _manifest(folder: Path, spec: dict[str, Any], shards: int) -> dict[str, Any]:
@@ -117,7 +127,9 @@ def _manifest(folder: Path, spec: dict[str, Any], shards: int) -> dict[str, Any]
         differs = {k: (manifest.get(k), v) for k, v in spec.items() if manifest.get(k) != v}
         if differs:
             what = ", ".join(f"{k}: {old!r} on disk, {new!r} now" for k, (old, new) in differs.items())
-            raise ConfigError(f"swm collect --ray resumes {folder} only with the same settings, got {what}; pick another --name")
+            raise ConfigError(
+                f"swm collect --ray resumes {folder} only with the same settings, got {what}; pick another --name"
+            )
         return manifest
     manifest = {**spec, "shards": shard_plan(spec["episodes"], spec["seed"], shards)}
     folder.mkdir(parents=True, exist_ok=True)
@@ -127,15 +139,29 @@ def _manifest(folder: Path, spec: dict[str, Any], shards: int) -> dict[str, Any]
     return manifest
 
 
-def _record_shard(env_id: str, name: str, shard: dict[str, int], policy: str, noise: float | None, image_size: int,
-                  max_steps: int | None, options: dict | None, cache_dir: str) -> str:
+def _record_shard(
+    env_id: str,
+    name: str,
+    shard: dict[str, int],
+    policy: str,
+    noise: float | None,
+    image_size: int,
+    max_steps: int | None,
+    options: dict | None,
+    cache_dir: str,
+) -> str:
     """One Ray task: record a shard with one env (resuming what a killed attempt committed)."""
     from ..cli.worlds import make_policy, make_world
 
     with make_world(env_id, 1, image_size, max_steps, verbose=0) as world:
         world.set_policy(make_policy(policy, env_id, seed=shard["seed"], noise=noise))
-        path = world.record_dataset(f"{name}/shard_{shard['shard']:05d}", episodes=shard["episodes"], seed=shard["seed"],
-                                    cache_dir=cache_dir, options=options)
+        path = world.record_dataset(
+            f"{name}/shard_{shard['shard']:05d}",
+            episodes=shard["episodes"],
+            seed=shard["seed"],
+            cache_dir=cache_dir,
+            options=options,
+        )
     return str(path)
 
 
@@ -154,10 +180,22 @@ def _shard_done(path: Path) -> int:
 
 
 def record_dataset_on_ray(
-    env_id: str, dataset_name: str, episodes: int, *, seed: int = 0, policy: str = "expert", noise: float | None = None,
-    shards: int | None = None, image_size: int = 64, max_steps: int | None = None, options: dict | None = None,
-    cache_dir: str | os.PathLike | None = None, address: str | None = None, num_cpus: int | None = None,
-    max_retries: int = 3, progress: bool = True,
+    env_id: str,
+    dataset_name: str,
+    episodes: int,
+    *,
+    seed: int = 0,
+    policy: str = "expert",
+    noise: float | None = None,
+    shards: int | None = None,
+    image_size: int = 64,
+    max_steps: int | None = None,
+    options: dict | None = None,
+    cache_dir: str | os.PathLike | None = None,
+    address: str | None = None,
+    num_cpus: int | None = None,
+    max_retries: int = 3,
+    progress: bool = True,
 ) -> Path:
     """Record ``episodes`` episodes of ``env_id`` under ``policy`` as a sharded dataset, on Ray.
 
@@ -171,17 +209,29 @@ def record_dataset_on_ray(
     cache = str(Path(cache_dir if cache_dir is not None else get_cache_dir()).resolve())
     folder = dataset_file(f"{dataset_name}/x", cache).parent
     if dataset_file(dataset_name, cache).exists():
-        raise ConfigError(f"swm collect --ray records a sharded dataset in {folder}/, got a name whose single file "
-                          f"{dataset_file(dataset_name, cache)} exists; pick another --name")
+        raise ConfigError(
+            f"swm collect --ray records a sharded dataset in {folder}/, got a name whose single file "
+            f"{dataset_file(dataset_name, cache)} exists; pick another --name"
+        )
     ray = init_ray(address, num_cpus=num_cpus, cache_dir=cache)
     count = shards or max(1, int(ray.cluster_resources().get("CPU", 1)))
-    spec = {"env": env_id, "episodes": int(episodes), "seed": int(seed), "policy": policy, "noise": noise,
-            "image_size": int(image_size), "max_steps": max_steps, "options": options}
+    spec = {
+        "env": env_id,
+        "episodes": int(episodes),
+        "seed": int(seed),
+        "policy": policy,
+        "noise": noise,
+        "image_size": int(image_size),
+        "max_steps": max_steps,
+        "options": options,
+    }
     manifest = _manifest(folder, spec, count)
     todo = [s for s in manifest["shards"] if _shard_done(folder / f"shard_{s['shard']:05d}.h5") < s["episodes"]]
     task = ray.remote(num_cpus=1, max_retries=max_retries)(_record_shard)
     refs = [task.remote(env_id, dataset_name, s, policy, noise, image_size, max_steps, options, cache) for s in todo]
-    _wait(ray, refs, progress, f"Recording {dataset_name} on Ray ({len(todo)} of {len(manifest['shards'])} shards to do)")
+    _wait(
+        ray, refs, progress, f"Recording {dataset_name} on Ray ({len(todo)} of {len(manifest['shards'])} shards to do)"
+    )
     return folder
 
 
@@ -200,8 +250,17 @@ def _wait(ray: Any, refs: list, progress: bool, label: str) -> list:
 
 
 # -- evaluation ----------------------------------------------------------------------------------
-def _evaluate_chunk(env_id: str, policy: str, seeds: Sequence[int], image_size: int, max_steps: int | None,
-                    factors: Sequence[str], plan: Any, device: str, cache_dir: str) -> dict[str, list]:
+def _evaluate_chunk(
+    env_id: str,
+    policy: str,
+    seeds: Sequence[int],
+    image_size: int,
+    max_steps: int | None,
+    factors: Sequence[str],
+    plan: Any,
+    device: str,
+    cache_dir: str,
+) -> dict[str, list]:
     """One Ray task: evaluate ``policy`` on consecutive ``seeds`` with one env, reading checkpoints
     from the driver's cache folder (a worker of an existing cluster does not inherit its environment)."""
     from ..cli.worlds import evaluate_policy, make_world
@@ -214,9 +273,21 @@ def _evaluate_chunk(env_id: str, policy: str, seeds: Sequence[int], image_size: 
 
 
 def evaluate_on_ray(
-    env_id: str, policy: str, episodes: int, seed: int, *, factors: Sequence[str] = (), image_size: int = 64,
-    max_steps: int | None = None, plan: Any = None, device: str = "cpu", chunks: int | None = None,
-    address: str | None = None, num_cpus: int | None = None, cache_dir: str | os.PathLike | None = None, progress: bool = True,
+    env_id: str,
+    policy: str,
+    episodes: int,
+    seed: int,
+    *,
+    factors: Sequence[str] = (),
+    image_size: int = 64,
+    max_steps: int | None = None,
+    plan: Any = None,
+    device: str = "cpu",
+    chunks: int | None = None,
+    address: str | None = None,
+    num_cpus: int | None = None,
+    cache_dir: str | os.PathLike | None = None,
+    progress: bool = True,
 ) -> dict[str, Any]:
     """Evaluate ``policy`` on seeds ``seed .. seed + episodes - 1`` spread over Ray tasks.
 
@@ -230,7 +301,10 @@ def evaluate_on_ray(
     count = chunks or max(1, int(ray.cluster_resources().get("CPU", 1)))
     parts = [c for c in np.array_split(np.arange(seed, seed + episodes), min(count, episodes)) if len(c)]
     task = ray.remote(num_cpus=1)(_evaluate_chunk)
-    refs = [task.remote(env_id, policy, c.tolist(), image_size, max_steps, list(factors), plan, device, cache) for c in parts]
+    refs = [
+        task.remote(env_id, policy, c.tolist(), image_size, max_steps, list(factors), plan, device, cache)
+        for c in parts
+    ]
     results = _wait(ray, refs, progress, f"Evaluating {policy} on Ray")
     out = {k: [v for r in results for v in r.get(k, [])] for k in ("episode_successes", "episode_lengths")}
     out["success_rate"] = 100.0 * float(np.mean(out["episode_successes"])) if out["episode_successes"] else 0.0

@@ -162,7 +162,10 @@ def record_episodes(
             ended = np.flatnonzero(np.asarray(world.terminateds) | np.asarray(world.truncateds))
             if not len(ended):
                 continue
-            batch = [_finish_episode(buffers[i], written + j if with_idx else None) for j, i in enumerate(ended[: episodes - done])]
+            batch = [
+                _finish_episode(buffers[i], written + j if with_idx else None)
+                for j, i in enumerate(ended[: episodes - done])
+            ]
             if committing:
                 writer.write_episodes(batch, next_seed=next_seed)
             else:
@@ -206,7 +209,9 @@ def collect(
     from .checks import check_seed
 
     if (path is None) == (writer is None):
-        raise ConfigError("World.collect requires exactly one of path= or writer=, got " + ("both" if path is not None else "neither"))
+        raise ConfigError(
+            "World.collect requires exactly one of path= or writer=, got " + ("both" if path is not None else "neither")
+        )
     if isinstance(episodes, bool) or not isinstance(episodes, (int, np.integer)) or episodes < 1:
         raise ConfigError(f"World.collect requires episodes to be a positive int, got {episodes!r}")
     seed = check_seed("World.collect", seed)
@@ -221,7 +226,12 @@ def collect(
             known = detect_format(target) if target.exists() else None
             format = known.name if known is not None else "hdf5"
             if known is None and target.suffix == ".lance":
-                logger.warning("%s: Lance is not bundled; writing HDF5 to %s.h5 (load_dataset(%r) finds it)", target, target, str(path))
+                logger.warning(
+                    "%s: Lance is not bundled; writing HDF5 to %s.h5 (load_dataset(%r) finds it)",
+                    target,
+                    target,
+                    str(path),
+                )
         if format == "lance":
             from ..errors import DependencyNotInstalled
 
@@ -290,7 +300,9 @@ def record_video(
     views = _check_views(world.infos, viewname)
     n = int(world.num_envs)
     policy = getattr(world, "policy", None)
-    blank = np.zeros_like(np.asarray(world.infos[views[0]])[:, -1]) if getattr(policy, "prediction_panel", None) else None
+    blank = (
+        np.zeros_like(np.asarray(world.infos[views[0]])[:, -1]) if getattr(policy, "prediction_panel", None) else None
+    )
 
     def predicted() -> np.ndarray | None:
         if blank is None:
@@ -323,8 +335,9 @@ def record_video_from_dataset(
     HDF5 episodes are read directly). See :func:`stable_worldmodel.data.video.record_video_from_dataset`."""
     from ..data.video import record_video_from_dataset as replay
 
-    return replay(video_path, dataset_name, episode_idx, max_steps=max_steps, fps=fps, viewname=viewname, cache_dir=cache_dir)
-
+    return replay(
+        video_path, dataset_name, episode_idx, max_steps=max_steps, fps=fps, viewname=viewname, cache_dir=cache_dir
+    )
 
 
 def _check_eval_args(world, dataset, episodes_idx, start_steps, goal_offset_steps, eval_budget) -> tuple[list, list]:
@@ -344,7 +357,7 @@ def _check_eval_args(world, dataset, episodes_idx, start_steps, goal_offset_step
         if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
             raise ConfigError(f"evaluate_from_dataset requires {name} to be an int >= {low}, got {value!r}")
     lengths = dataset.lengths
-    for ep, start in zip(episodes_idx, start_steps):
+    for ep, start in zip(episodes_idx, start_steps, strict=False):
         if not 0 <= ep < len(lengths):
             raise ConfigError(f"evaluate_from_dataset requires episodes_idx in [0, {len(lengths)}), got {ep}")
         if start < 0 or start + goal_offset_steps >= lengths[ep]:
@@ -355,7 +368,9 @@ def _check_eval_args(world, dataset, episodes_idx, start_steps, goal_offset_step
     return episodes_idx, start_steps
 
 
-def _apply_callables(world: Any, callables: Sequence[Mapping[str, Any]] | None, starts: Sequence[Mapping[str, Any]]) -> None:
+def _apply_callables(
+    world: Any, callables: Sequence[Mapping[str, Any]] | None, starts: Sequence[Mapping[str, Any]]
+) -> None:
     """Call ``env.unwrapped.<method>(**args)`` on every env after the reset, as release 0.0.3.
 
     ``callables``: ``[{"method": name, "args": {arg: {"value": column}}}]``: each argument's
@@ -426,11 +441,13 @@ def evaluate_from_dataset(
         from ..data.hdf5 import HDF5Dataset
 
         dataset = HDF5Dataset(dataset, preload=False)  # reads a few rows
-    episodes_idx, start_steps = _check_eval_args(world, dataset, episodes_idx, start_steps, goal_offset_steps, eval_budget)
-    rows = [int(dataset.offsets[e]) + s for e, s in zip(episodes_idx, start_steps)]
+    episodes_idx, start_steps = _check_eval_args(
+        world, dataset, episodes_idx, start_steps, goal_offset_steps, eval_budget
+    )
+    rows = [int(dataset.offsets[e]) + s for e, s in zip(episodes_idx, start_steps, strict=False)]
     starts = [dataset.get_row_data(r) for r in rows]
     goals = [dataset.get_row_data(r + int(goal_offset_steps)) for r in rows]
-    options = world.envs.call_each("reset_options_from_dataset", [(s, g) for s, g in zip(starts, goals)])
+    options = world.envs.call_each("reset_options_from_dataset", [(s, g) for s, g in zip(starts, goals, strict=False)])
     n = int(world.num_envs)
     seeds = world.draw_seeds(n)
     world.reset_envs(list(range(n)), seeds=seeds, options=list(options))

@@ -26,8 +26,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium.vector.utils import batch_space
 
-from ..errors import ConfigError
-from ..errors import WorkerError
+from ..errors import ConfigError, WorkerError
 from ._workers import WorkerPool, check_main_guard, get_context, guard_hint
 from .batching import concat_batches, stack_dicts
 from .shm import ShmReader, unpack_result
@@ -54,7 +53,7 @@ class EnvGroup:
 
     def reset(self, ids: Sequence[int], seeds: Sequence[int | None], options: Sequence[dict | None]):
         obs, infos = [], []
-        for i, seed, opt in zip(ids, seeds, options):
+        for i, seed, opt in zip(ids, seeds, options, strict=False):
             self.current = i
             o, info = self.envs[i].reset(seed=None if seed is None else int(seed), options=opt)
             obs.append(o)
@@ -63,7 +62,7 @@ class EnvGroup:
 
     def step(self, actions: Sequence[Any]):
         obs, rewards, terms, truncs, infos = [], [], [], [], []
-        for i, (env, action) in enumerate(zip(self.envs, actions)):
+        for i, (env, action) in enumerate(zip(self.envs, actions, strict=False)):
             self.current = i
             o, r, te, tr, info = env.step(action)
             obs.append(o)
@@ -81,7 +80,7 @@ class EnvGroup:
 
     def call(self, ids: Sequence[int], name: str, args_list: Sequence[tuple], kwargs_list: Sequence[dict]) -> list:
         out = []
-        for i, args, kwargs in zip(ids, args_list, kwargs_list):
+        for i, args, kwargs in zip(ids, args_list, kwargs_list, strict=False):
             self.current = i
             attr = getattr(self.envs[i].unwrapped, name)
             out.append(attr(*args, **kwargs) if callable(attr) else attr)
@@ -167,7 +166,7 @@ class VecEnv:
         ctx = get_context(start_method)
         check_main_guard(ctx.get_start_method())
         bounds = np.linspace(0, self.num_envs, n_workers + 1).round().astype(int)
-        self._slices = [(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:])]
+        self._slices = [(int(a), int(b)) for a, b in zip(bounds[:-1], bounds[1:], strict=False)]
         self._reader = ShmReader()
         payload = cloudpickle.dumps(factory)
         self._pool = WorkerPool(ctx, [(EnvGroup, payload, b - a) for a, b in self._slices])
@@ -291,7 +290,9 @@ class VecEnv:
         n = self.num_envs
         return self.call_each(name, [args] * n, [kwargs] * n)
 
-    def call_each(self, name: str, args_list: Sequence, kwargs_list: Sequence[dict] | None = None, env_ids=None) -> list:
+    def call_each(
+        self, name: str, args_list: Sequence, kwargs_list: Sequence[dict] | None = None, env_ids=None
+    ) -> list:
         """Like :meth:`call` with each env's own ``args_list[i]`` (a tuple, or one argument)."""
         ids = list(range(self.num_envs)) if env_ids is None else self.check_ids(env_ids)
         args_list = [a if isinstance(a, tuple) else (a,) for a in args_list]

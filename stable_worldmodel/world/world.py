@@ -12,12 +12,11 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from .. import keys
 from ..envs._registry import check_env_id
 from ..errors import ConfigError
 from ..wrapper import MegaWrapper
-from ..wrapper.mega import GOAL_IF_ANY
 from ..wrapper._image import check_shape
+from ..wrapper.mega import GOAL_IF_ANY
 from .checks import check_env_kwargs, check_reset_options, check_seed, check_seeds
 from .evaluate import evaluate as _evaluate
 from .vector import VecEnv
@@ -228,7 +227,9 @@ class World:
         if not self._has_reset and len(ids) != n:
             raise ConfigError("World.reset_envs on a subset requires a full World.reset() first")
         self.infos = set_rows(self.infos, ids, infos, n)
-        self.states = set_rows(self.states, ids, obs, n) if isinstance(obs, dict) else _set_array_rows(self.states, ids, obs, n)
+        self.states = (
+            set_rows(self.states, ids, obs, n) if isinstance(obs, dict) else _set_array_rows(self.states, ids, obs, n)
+        )
         self.rewards = self.rewards.copy()
         self.terminateds = self.terminateds.copy()
         self.truncateds = self.truncateds.copy()
@@ -310,12 +311,27 @@ class World:
         plays at most one episode) is accepted as 0.1.1 names it.
         """
         if dataset is not None:
-            missing = [k for k, v in (("episodes_idx", episodes_idx), ("start_steps", start_steps), ("goal_offset", goal_offset), ("eval_budget", eval_budget)) if v is None]
+            missing = [
+                k
+                for k, v in (
+                    ("episodes_idx", episodes_idx),
+                    ("start_steps", start_steps),
+                    ("goal_offset", goal_offset),
+                    ("eval_budget", eval_budget),
+                )
+                if v is None
+            ]
             if missing:
                 raise ConfigError(f"World.evaluate(dataset=...) requires {', '.join(missing)} too")
             return self.evaluate_from_dataset(
-                dataset, episodes_idx, start_steps, goal_offset, eval_budget, callables=callables,
-                save_video=video is not None, video_path=video if video is not None else "./",
+                dataset,
+                episodes_idx,
+                start_steps,
+                goal_offset,
+                eval_budget,
+                callables=callables,
+                save_video=video is not None,
+                video_path=video if video is not None else "./",
             )
         if reset_mode not in (None, "auto", "wait"):
             raise ConfigError(f"World.evaluate requires reset_mode 'auto', 'wait' or None, got {reset_mode!r}")
@@ -325,41 +341,107 @@ class World:
             raise ConfigError(
                 f"World.evaluate(reset_mode='wait') plays one episode per env: episodes <= num_envs ({self.num_envs}), got {episodes}"
             )
-        return _evaluate(self, episodes=episodes, eval_keys=eval_keys, seed=seed, options=options, dump_every=dump_every, video=video)
+        return _evaluate(
+            self, episodes=episodes, eval_keys=eval_keys, seed=seed, options=options, dump_every=dump_every, video=video
+        )
 
-    def record_dataset(self, dataset_name: str, episodes: int = 10, seed: int | None = None, cache_dir=None, options: dict | None = None) -> Path:
+    def record_dataset(
+        self,
+        dataset_name: str,
+        episodes: int = 10,
+        seed: int | None = None,
+        cache_dir=None,
+        options: dict | None = None,
+    ) -> Path:
         """Record ``episodes`` complete episodes into ``<cache_dir>/<dataset_name>.h5`` (see :mod:`.recording`)."""
         from .recording import record_dataset
 
         return record_dataset(self, dataset_name, episodes=episodes, seed=seed, cache_dir=cache_dir, options=options)
 
-    def collect(self, path=None, episodes: int = 0, seed: int | None = None, options: dict | None = None, format: str | None = None, writer: Any = None, progress: bool = True) -> None:  # noqa: A002
+    def collect(
+        self,
+        path=None,
+        episodes: int = 0,
+        seed: int | None = None,
+        options: dict | None = None,
+        format: str | None = None,
+        writer: Any = None,
+        progress: bool = True,
+    ) -> None:  # noqa: A002
         """Upstream 0.1.1's recorder: ``episodes`` more episodes to ``path`` (any registered format) or ``writer``
         (see :func:`.recording.collect`)."""
         from .recording import collect
 
-        collect(self, path, episodes=episodes, seed=seed, options=options, format=format, writer=writer, progress=progress)
+        collect(
+            self, path, episodes=episodes, seed=seed, options=options, format=format, writer=writer, progress=progress
+        )
 
-    def record_video(self, video_path, max_steps: int = 500, fps: int = 30, viewname: str | list[str] = "pixels", seed: int | None = None, options: dict | None = None):
+    def record_video(
+        self,
+        video_path,
+        max_steps: int = 500,
+        fps: int = 30,
+        viewname: str | list[str] = "pixels",
+        seed: int | None = None,
+        options: dict | None = None,
+    ):
         """One MP4 per env of a rollout under the current policy (observation above goal)."""
         from .recording import record_video
 
-        return record_video(self, video_path, max_steps=max_steps, fps=fps, viewname=viewname, seed=seed, options=options)
+        return record_video(
+            self, video_path, max_steps=max_steps, fps=fps, viewname=viewname, seed=seed, options=options
+        )
 
-    def record_video_from_dataset(self, video_path, dataset_name, episode_idx, max_steps: int = 500, fps: int = 30, num_proc: int = 4, viewname: str | list[str] = "pixels", cache_dir=None):
+    def record_video_from_dataset(
+        self,
+        video_path,
+        dataset_name,
+        episode_idx,
+        max_steps: int = 500,
+        fps: int = 30,
+        num_proc: int = 4,
+        viewname: str | list[str] = "pixels",
+        cache_dir=None,
+    ):
         """Replay recorded episodes of ``dataset_name`` as MP4 videos."""
         from .recording import record_video_from_dataset
 
         return record_video_from_dataset(
-            self, video_path, dataset_name, episode_idx, max_steps=max_steps, fps=fps, num_proc=num_proc, viewname=viewname, cache_dir=cache_dir
+            self,
+            video_path,
+            dataset_name,
+            episode_idx,
+            max_steps=max_steps,
+            fps=fps,
+            num_proc=num_proc,
+            viewname=viewname,
+            cache_dir=cache_dir,
         )
 
-    def evaluate_from_dataset(self, dataset: Any, episodes_idx: Sequence[int], start_steps: Sequence[int], goal_offset_steps: int, eval_budget: int, callables: list[dict] | None = None, save_video: bool = True, video_path: str | Path = "./") -> dict:
+    def evaluate_from_dataset(
+        self,
+        dataset: Any,
+        episodes_idx: Sequence[int],
+        start_steps: Sequence[int],
+        goal_offset_steps: int,
+        eval_budget: int,
+        callables: list[dict] | None = None,
+        save_video: bool = True,
+        video_path: str | Path = "./",
+    ) -> dict:
         """Start each env from a recorded state, with the state ``goal_offset_steps`` later as goal."""
         from .recording import evaluate_from_dataset
 
         return evaluate_from_dataset(
-            self, dataset, episodes_idx, start_steps, goal_offset_steps, eval_budget, callables=callables, save_video=save_video, video_path=video_path
+            self,
+            dataset,
+            episodes_idx,
+            start_steps,
+            goal_offset_steps,
+            eval_budget,
+            callables=callables,
+            save_video=save_video,
+            video_path=video_path,
         )
 
 

@@ -12,7 +12,9 @@ def resize(img: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     import cv2
 
     shrinking = img.shape[0] >= shape[0] and img.shape[1] >= shape[1]
-    out = cv2.resize(img, (int(shape[1]), int(shape[0])), interpolation=cv2.INTER_AREA if shrinking else cv2.INTER_LINEAR)
+    out = cv2.resize(
+        img, (int(shape[1]), int(shape[0])), interpolation=cv2.INTER_AREA if shrinking else cv2.INTER_LINEAR
+    )
     return out if out.ndim == img.ndim else out[..., None]
 
 

@@ -79,7 +79,9 @@ class EnsureImageShape(_InfoCheck):
     def _check(self, info: dict, where: str) -> None:
         img = info.get(self.image_key)
         if img is None:
-            raise RuntimeError(f"EnsureImageShape requires info[{self.image_key!r}] after {where}(), got keys {sorted(info)}")
+            raise RuntimeError(
+                f"EnsureImageShape requires info[{self.image_key!r}] after {where}(), got keys {sorted(info)}"
+            )
         shape = tuple(np.shape(img)[:2])
         if shape != self.image_shape:
             raise RuntimeError(

@@ -18,7 +18,9 @@ class ResizeGoalWrapper(gym.Wrapper):
     object (or an equal one), the previous result is reused instead of resizing again.
     """
 
-    def __init__(self, env: gym.Env, pixels_shape: tuple[int, int] = (84, 84), torchvision_transform: Callable | None = None):
+    def __init__(
+        self, env: gym.Env, pixels_shape: tuple[int, int] = (84, 84), torchvision_transform: Callable | None = None
+    ):
         super().__init__(env)
         self.pixels_shape = check_shape("ResizeGoalWrapper pixels_shape", pixels_shape)
         self.torchvision_transform = torchvision_transform

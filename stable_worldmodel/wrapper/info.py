@@ -69,9 +69,11 @@ class EverythingToInfoWrapper(gym.Wrapper):
         if not requested or space is None:
             return {}
         values = flatten_dict(space.value)
-        names = list(values) if "all" in requested else [
-            n for n in values if any(n == r or n.startswith(r + ".") for r in requested)
-        ]
+        names = (
+            list(values)
+            if "all" in requested
+            else [n for n in values if any(n == r or n.startswith(r + ".") for r in requested)]
+        )
         return {f"{keys.VARIATION}.{n}": np.asarray(values[n]).copy() for n in names}
 
     def _fill(self, info: dict[str, Any], obs: Any, reward: float, terminated: bool, truncated: bool, action: Any):

@@ -33,7 +33,9 @@ class AddPixelsWrapper(gym.Wrapper):
     - ``torchvision_transform`` (any callable on an (H, W, 3) uint8 array) is applied last.
     """
 
-    def __init__(self, env: gym.Env, pixels_shape: tuple[int, int] = (84, 84), torchvision_transform: Callable | None = None):
+    def __init__(
+        self, env: gym.Env, pixels_shape: tuple[int, int] = (84, 84), torchvision_transform: Callable | None = None
+    ):
         super().__init__(env)
         self.pixels_shape = check_shape("AddPixelsWrapper pixels_shape", pixels_shape)
         self.torchvision_transform = torchvision_transform

@@ -45,8 +45,13 @@ class VariationWrapper(gym.vector.VectorWrapper):
         elif variation_mode == "same":
             first = spaces[0]
             for other in spaces[1:]:
-                if other is not None and getattr(other, "names", lambda: None)() != getattr(first, "names", lambda: None)():
-                    raise ConfigError("VariationWrapper(variation_mode='same') requires identical sub-env variation spaces")
+                if (
+                    other is not None
+                    and getattr(other, "names", lambda: None)() != getattr(first, "names", lambda: None)()
+                ):
+                    raise ConfigError(
+                        "VariationWrapper(variation_mode='same') requires identical sub-env variation spaces"
+                    )
             self.single_variation_space = first
             self.variation_space = batch_space(first, env.num_envs)
         else:

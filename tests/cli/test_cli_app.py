@@ -12,7 +12,8 @@ import typer
 import stable_worldmodel as swm_pkg
 from stable_worldmodel import cli
 from stable_worldmodel.cli import root as app_module
-from stable_worldmodel.cli.errors import error_line as format_error, int_in, is_user_error, one_line
+from stable_worldmodel.cli.errors import error_line as format_error
+from stable_worldmodel.cli.errors import int_in, is_user_error, one_line
 from stable_worldmodel.errors import ConfigError, unknown_name
 
 
@@ -33,7 +34,9 @@ def test_version_short_flag_and_main_return_code(capsys):
 
 
 def test_python_dash_m_version():
-    out = subprocess.run([sys.executable, "-m", "stable_worldmodel.cli", "--version"], capture_output=True, text=True, timeout=60)
+    out = subprocess.run(
+        [sys.executable, "-m", "stable_worldmodel.cli", "--version"], capture_output=True, text=True, timeout=60
+    )
     assert out.returncode == 0, out.stderr
     assert out.stdout.strip() == f"stable-worldmodel {swm_pkg.__version__}"
 

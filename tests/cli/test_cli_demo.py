@@ -47,20 +47,32 @@ def test_demo_writes_videos_plot_results_and_one_last_line(swm, tmp_path):
     for policy, row in results["policies"].items():
         assert row["episodes"] == 4
         assert np.allclose(row["ci95"], wilson_interval(row["successes"], 4), atol=1e-4)
-        assert f"{100 * row['success_rate']:.1f}%" in next(line for line in stdout.splitlines() if line.startswith(f"│ {policy} "))
+        assert f"{100 * row['success_rate']:.1f}%" in next(
+            line for line in stdout.splitlines() if line.startswith(f"│ {policy} ")
+        )
     assert results["policies"]["expert"]["successes"] == 4
     assert list(results["policies"]) == ["random", "expert", "dummy+cem"]
 
     # the model: trained for the steps asked, saved where the record says, planned with the CEM asked
     model = results["model"]
     assert model["run"] == "demo-dummy" and model["steps"] == 3
-    assert (Path(model["checkpoint"]) / "weights.pt").is_file() and (Path(model["checkpoint"]) / "config.json").is_file()
+    assert (Path(model["checkpoint"]) / "weights.pt").is_file() and (
+        Path(model["checkpoint"]) / "config.json"
+    ).is_file()
     assert model["plan"]["solver"] == "cem" and model["plan"]["samples"] == 16 and model["plan"]["iterations"] == 2
 
     # exactly one closing line naming where the outputs are
     last = stdout.strip().splitlines()[-1]
     assert last.startswith(f"Demo outputs in {out.resolve()} ")
-    for name in ("random.mp4", "expert.mp4", "dummy+cem.mp4", "success_rates.png", "results.json", "demo-toy-v0-expert", model["checkpoint"]):
+    for name in (
+        "random.mp4",
+        "expert.mp4",
+        "dummy+cem.mp4",
+        "success_rates.png",
+        "results.json",
+        "demo-toy-v0-expert",
+        model["checkpoint"],
+    ):
         assert name in last
 
 

@@ -16,7 +16,18 @@ import pytest
 TOY = "swm/Toy-v0"
 RUN = "toy-gcbc"
 #: a width-8 CNN GCBC at 16x16 acting on one frame
-NET = dict(image_size=16, embed_dim=16, cnn_width=8, depth=3, heads=2, dim_head=8, mlp_dim=32, history_size=1, warmup_steps=0, batch_size=32)
+NET = dict(
+    image_size=16,
+    embed_dim=16,
+    cnn_width=8,
+    depth=3,
+    heads=2,
+    dim_head=8,
+    mlp_dim=32,
+    history_size=1,
+    warmup_steps=0,
+    batch_size=32,
+)
 SMALL = ("--device", "cpu", "--image-size", "16")
 
 
@@ -36,7 +47,9 @@ def template(tmp_path_factory):
         with World(TOY, 2, (16, 16), max_episode_steps=30, verbose=0, vectorization_mode="sync") as world:
             world.set_policy(expert_policy(TOY))
             world.record_dataset("toy", episodes=30, seed=0, cache_dir=root)
-        train("gcbc", "toy", "tiny", steps=300, name=RUN, seed=0, device="cpu", progress=False, cache_dir=str(root), **NET)
+        train(
+            "gcbc", "toy", "tiny", steps=300, name=RUN, seed=0, device="cpu", progress=False, cache_dir=str(root), **NET
+        )
     finally:
         torch.set_num_threads(threads)
     return root
@@ -64,7 +77,13 @@ def test_trained_gcbc_beats_the_random_policy(swm, home, tmp_path):
     assert gc["success_rate"] >= 50.0
     model = gc["model"]
     assert model["checkpoint"] == str(home / "checkpoints" / RUN)
-    assert (model["model"], model["preset"], model["dataset"], model["steps"], model["image_size"]) == ("gcbc", "tiny", "toy", 300, 16)
+    assert (model["model"], model["preset"], model["dataset"], model["steps"], model["image_size"]) == (
+        "gcbc",
+        "tiny",
+        "toy",
+        300,
+        16,
+    )
     assert "plan" not in gc and "history_size" not in gc  # one frame, nothing planned
 
 
@@ -72,8 +91,20 @@ def test_history_and_action_blocks_reach_the_policy(swm, home, tmp_path):
     """A policy on 2 frames and blocks of 2 actions: the World keeps 2 frames, the policy acts with the first action of each block."""
     from stable_worldmodel.train import train
 
-    train("gcbc", "toy", "tiny", steps=2, name="hist", seed=0, device="cpu", progress=False, **{**NET, "history_size": 2, "frameskip": 2})
-    record = evaluate(swm, "gc:hist", tmp_path / "out.json", "--episodes", "2", "--num-envs", "2", "--max-steps", "5", *SMALL)
+    train(
+        "gcbc",
+        "toy",
+        "tiny",
+        steps=2,
+        name="hist",
+        seed=0,
+        device="cpu",
+        progress=False,
+        **{**NET, "history_size": 2, "frameskip": 2},
+    )
+    record = evaluate(
+        swm, "gc:hist", tmp_path / "out.json", "--episodes", "2", "--num-envs", "2", "--max-steps", "5", *SMALL
+    )
     assert record["history_size"] == 2 and record["model"]["frameskip"] == 2
     assert 1 <= record["mean_length"] <= 5
 
@@ -95,15 +126,43 @@ def test_goal_conditioned_policy_objects(home):
 
 
 def test_eval_gc_from_dataset_uses_held_out_episodes(swm, home, tmp_path):
-    record = evaluate(swm, f"gc:{RUN}", tmp_path / "out.json", "--episodes", "3", "--num-envs", "3", *SMALL,
-                      "--from-dataset", "toy", "--goal-offset", "2", "--budget", "5")
+    record = evaluate(
+        swm,
+        f"gc:{RUN}",
+        tmp_path / "out.json",
+        "--episodes",
+        "3",
+        "--num-envs",
+        "3",
+        *SMALL,
+        "--from-dataset",
+        "toy",
+        "--goal-offset",
+        "2",
+        "--budget",
+        "5",
+    )
     val = json.loads((home / "checkpoints" / RUN / "protocol.json").read_text())["val_episodes"]
     assert record["held_out"] is True and set(record["episodes_idx"]) <= set(val)
 
 
 def test_swm_train_gcbc_with_run_name(swm, home):
-    result = swm("train", "gcbc", "--dataset", "toy", "--preset", "tiny", "--steps", "2", "--batch-size", "4", "--device", "cpu",
-                 "--run", "cli-gcbc")
+    result = swm(
+        "train",
+        "gcbc",
+        "--dataset",
+        "toy",
+        "--preset",
+        "tiny",
+        "--steps",
+        "2",
+        "--batch-size",
+        "4",
+        "--device",
+        "cpu",
+        "--run",
+        "cli-gcbc",
+    )
     assert result.exit_code == 0, result.output
     assert "Trained gcbc (tiny) on toy: 2 steps" in result.stdout
     assert "--policy gc:cli-gcbc" in result.stdout
@@ -123,7 +182,9 @@ def test_gc_and_wm_checkpoints_are_not_interchangeable(swm, home, error_line):
     from stable_worldmodel.wm.utils import save_pretrained
 
     config = wm.get_config("dummy", "tiny", image_size=16, frameskip=1)
-    save_pretrained(wm.make("dummy", "tiny", action_dim=2, image_size=16, frameskip=1), "planner", config=config.target_tree(2))
+    save_pretrained(
+        wm.make("dummy", "tiny", action_dim=2, image_size=16, frameskip=1), "planner", config=config.target_tree(2)
+    )
     result = swm("eval", TOY, "--policy", "gc:planner", "--episodes", "1", *SMALL)
     assert result.exit_code == 1
     assert "--policy wm:planner" in error_line(result)

@@ -21,8 +21,18 @@ TOY = "swm/Toy-v0"
 RUN = "toy-lewm"
 #: a tiny LeWM at 16x16; a quarter of the 12 episodes held out for validation
 TINY = dict(
-    image_size=16, embed_dim=16, cnn_width=8, depth=1, heads=2, dim_head=8, mlp_dim=32, projector_hidden=32,
-    sigreg_num_proj=32, batch_size=8, frameskip=1, val_fraction=0.25,
+    image_size=16,
+    embed_dim=16,
+    cnn_width=8,
+    depth=1,
+    heads=2,
+    dim_head=8,
+    mlp_dim=32,
+    projector_hidden=32,
+    sigreg_num_proj=32,
+    batch_size=8,
+    frameskip=1,
+    val_fraction=0.25,
 )
 #: a small plan, on the CPU, with 16x16 images
 PLAN = ("--solver", "cem", "--samples", "16", "--iterations", "2", "--horizon", "3")
@@ -42,8 +52,9 @@ def template(tmp_path_factory):
         with World(TOY, 2, (16, 16), max_episode_steps=20, verbose=0, vectorization_mode="sync") as world:
             world.set_policy(expert_policy(TOY))
             world.record_dataset("toy", episodes=12, seed=0, cache_dir=root)
-        train("lewm", "toy", "tiny", steps=2, name=RUN, seed=0, device="cpu", progress=False, cache_dir=str(root),
-              **TINY)
+        train(
+            "lewm", "toy", "tiny", steps=2, name=RUN, seed=0, device="cpu", progress=False, cache_dir=str(root), **TINY
+        )
     return root
 
 
@@ -60,7 +71,20 @@ def protocol(home) -> dict:
 
 def test_eval_wm_writes_success_rate_interval_seeds_and_plan(swm, home, tmp_path):
     out = tmp_path / "results" / "out.json"
-    args = ("eval", TOY, "--policy", f"wm:{RUN}", "--episodes", "4", "--num-envs", "2", "--max-steps", "10", *PLAN, *SMALL)
+    args = (
+        "eval",
+        TOY,
+        "--policy",
+        f"wm:{RUN}",
+        "--episodes",
+        "4",
+        "--num-envs",
+        "2",
+        "--max-steps",
+        "10",
+        *PLAN,
+        *SMALL,
+    )
     result = swm(*args, "--json", str(out))
     assert result.exit_code == 0, result.output
     record = json.loads(out.read_text())
@@ -73,8 +97,17 @@ def test_eval_wm_writes_success_rate_interval_seeds_and_plan(swm, home, tmp_path
     assert np.allclose(record["ci95"], [100 * v for v in wilson_interval(successes, 4)], atol=0.01)
     assert 1 <= record["mean_length"] <= 10
     assert record["plan"] == {
-        "solver": "cem", "horizon": 3, "receding_horizon": 1, "samples": 16, "iterations": 2, "topk": None, "seed": 0,
-        "cost": "auto", "subgoals": "auto", "lookahead": 1, "patience": 10,  # auto: the graph of its 9 training episodes
+        "solver": "cem",
+        "horizon": 3,
+        "receding_horizon": 1,
+        "samples": 16,
+        "iterations": 2,
+        "topk": None,
+        "seed": 0,
+        "cost": "auto",
+        "subgoals": "auto",
+        "lookahead": 1,
+        "patience": 10,  # auto: the graph of its 9 training episodes
     }
     model = record["model"]
     assert model["checkpoint"] == str(home / "checkpoints" / RUN)
@@ -112,9 +145,9 @@ def test_eval_wm_from_dataset_starts_from_held_out_episodes(swm, home, tmp_path,
     assert len(val) == 3 and set(record["episodes_idx"]) <= set(val)
     lengths = HDF5Dataset("toy", preload=False).lengths
     assert len(record["episodes_idx"]) == len(record["start_steps"]) == len(record["episode_successes"]) == 3
-    for episode, start in zip(record["episodes_idx"], record["start_steps"]):
+    for episode, start in zip(record["episodes_idx"], record["start_steps"], strict=False):
         assert 0 <= start and start + 2 < lengths[episode]  # the goal is a recorded state 2 steps later
-    assert len(set(zip(record["episodes_idx"], record["start_steps"]))) == 3  # no repeated start
+    assert len(set(zip(record["episodes_idx"], record["start_steps"], strict=False))) == 3  # no repeated start
     # at most the budget: per episode, and per batch of 2 envs (3 episodes: 2 batches)
     assert 1 <= record["mean_length"] <= 4
     assert 1 <= len(steps) <= 2 * 4 and set(steps) == {2}
@@ -124,8 +157,22 @@ def test_eval_wm_from_dataset_starts_from_held_out_episodes(swm, home, tmp_path,
 
 def test_eval_random_from_dataset_uses_every_episode(swm, home, tmp_path):
     out = tmp_path / "out.json"
-    result = swm("eval", TOY, "--episodes", "8", "--image-size", "16", "--from-dataset", "toy", "--goal-offset", "1",
-                 "--budget", "3", "--json", str(out))
+    result = swm(
+        "eval",
+        TOY,
+        "--episodes",
+        "8",
+        "--image-size",
+        "16",
+        "--from-dataset",
+        "toy",
+        "--goal-offset",
+        "1",
+        "--budget",
+        "3",
+        "--json",
+        str(out),
+    )
     assert result.exit_code == 0, result.output
     record = json.loads(out.read_text())
     assert record["held_out"] is False and "plan" not in record and "model" not in record
@@ -172,7 +219,20 @@ def test_eval_bad_plan_settings_are_one_line(swm, home, error_line, options, nee
 )
 def test_eval_plan_settings_are_recorded(swm, home, tmp_path, options, recorded):
     out = tmp_path / "out.json"
-    args = ("eval", TOY, "--policy", f"wm:{RUN}", "--episodes", "2", "--num-envs", "2", "--max-steps", "6", *PLAN, *SMALL)
+    args = (
+        "eval",
+        TOY,
+        "--policy",
+        f"wm:{RUN}",
+        "--episodes",
+        "2",
+        "--num-envs",
+        "2",
+        "--max-steps",
+        "6",
+        *PLAN,
+        *SMALL,
+    )
     result = swm(*args, *options, "--json", str(out))
     assert result.exit_code == 0, result.output
     plan = json.loads(out.read_text())["plan"]
@@ -185,7 +245,20 @@ def test_auto_subgoals_plan_on_the_goal_alone_without_the_training_dataset(swm, 
     del record["dataset_path"]  # the template's file: found by name in this home only
     (home / "checkpoints" / RUN / "protocol.json").write_text(json.dumps(record))
     out = tmp_path / "out.json"
-    args = ("eval", TOY, "--policy", f"wm:{RUN}", "--episodes", "2", "--num-envs", "2", "--max-steps", "4", *PLAN, *SMALL)
+    args = (
+        "eval",
+        TOY,
+        "--policy",
+        f"wm:{RUN}",
+        "--episodes",
+        "2",
+        "--num-envs",
+        "2",
+        "--max-steps",
+        "4",
+        *PLAN,
+        *SMALL,
+    )
     result = swm(*args, "--json", str(out))
     assert result.exit_code == 0, result.output
     plan = json.loads(out.read_text())["plan"]
@@ -206,11 +279,11 @@ def test_dataset_starts_are_seeded_valid_and_distinct_while_possible():
     eps, starts = dataset_starts(data, 5, goal_offset=3, seed=1, pool=[0, 1, 2])
     assert (eps, starts) == dataset_starts(data, 5, goal_offset=3, seed=1, pool=[0, 1, 2])
     assert set(eps) <= {1, 2}  # episode 0 is too short for the offset, 3 is outside the pool
-    assert all(s + 3 < data.lengths[e] for e, s in zip(eps, starts))
-    assert len(set(zip(eps, starts))) == 5
+    assert all(s + 3 < data.lengths[e] for e, s in zip(eps, starts, strict=False))
+    assert len(set(zip(eps, starts, strict=False))) == 5
     # more starts than distinct pairs (5 + 3 = 8): every pair is used, then one repeats
     eps, starts = dataset_starts(data, 9, goal_offset=3, seed=0, pool=[0, 1, 2])
-    assert len(eps) == 9 and len(set(zip(eps, starts))) == 8
+    assert len(eps) == 9 and len(set(zip(eps, starts, strict=False))) == 8
     with pytest.raises(ConfigError, match="--goal-offset 8"):
         dataset_starts(data, 2, goal_offset=8, seed=0)
 

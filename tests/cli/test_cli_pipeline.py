@@ -43,7 +43,9 @@ def test_collect_default_name_resume_and_overwrite(swm):
 
 
 def test_collect_with_variation_records_factor_columns(swm):
-    result = swm("collect", TOY, "-n", "2", "--name", "varied", "--variation", "agent.color", "--variation", "goal", *SMALL)
+    result = swm(
+        "collect", TOY, "-n", "2", "--name", "varied", "--variation", "agent.color", "--variation", "goal", *SMALL
+    )
     assert result.exit_code == 0, result.output
     names = dataset_info("varied")["variation"]["names"]
     assert "agent.color" in names and "goal.color" in names
@@ -69,13 +71,17 @@ def test_collect_expert_adds_seeded_action_noise_where_the_expert_takes_it(swm):
         result = swm("collect", *room, "--name", name, "--seed", "1", *extra)
         assert result.exit_code == 0, result.output
     assert "(action noise 1)" in swm("collect", *room, "--name", "n2", "--seed", "2").stdout
-    maze = swm("collect", "swm/SimplePointMaze-v0", "--policy", "expert", "-n", "1", "--max-steps", "5", "--image-size", "16")
+    maze = swm(
+        "collect", "swm/SimplePointMaze-v0", "--policy", "expert", "-n", "1", "--max-steps", "5", "--image-size", "16"
+    )
     assert "(action noise 0.2)" in maze.stdout  # in units of the action bound (+-0.2 there)
     noisy, clean, half = _actions("noisy"), _actions("clean"), _actions("half")
     np.testing.assert_array_equal(noisy, _actions("again"))  # seeded
     distinct = [len(np.unique(np.round(a, 2), axis=0)) / len(a) for a in (clean, half, noisy)]
     assert distinct[0] < 0.5 < distinct[1] and distinct[2] > 0.5  # the clean controller repeats a few commands
-    assert all(dataset_info(n)["num_episodes"] == 4 for n in ("noisy", "clean", "half"))  # the noisy expert still ends its episodes
+    assert all(
+        dataset_info(n)["num_episodes"] == 4 for n in ("noisy", "clean", "half")
+    )  # the noisy expert still ends its episodes
 
 
 def test_collect_noise_needs_an_expert_that_takes_it(swm, error_line):

@@ -33,8 +33,15 @@ def checkpoint():
 
     model = wm.make("dummy", "tiny", action_dim=2)
     weights = save_pretrained(model, "runx", config=wm.get_config("dummy", "tiny").target_tree(2))
-    protocol = {"model": "dummy", "dataset": "toy-expert", "steps": 40, "history_size": 1, "frameskip": 5, "image_size": 16,
-                "final": {"train_loss": 0.25, "val_loss": 0.5}}
+    protocol = {
+        "model": "dummy",
+        "dataset": "toy-expert",
+        "steps": 40,
+        "history_size": 1,
+        "frameskip": 5,
+        "image_size": 16,
+        "final": {"train_loss": 0.25, "val_loss": 0.5},
+    }
     (weights.parent / "protocol.json").write_text(json.dumps(protocol))
     return sum(v.numel() for v in model.state_dict().values())
 
@@ -156,7 +163,9 @@ def test_show_checkpoint_without_protocol(swm):
     from stable_worldmodel import wm
     from stable_worldmodel.wm.utils import save_pretrained
 
-    save_pretrained(wm.make("dummy", "tiny", action_dim=2), "upstream", config=wm.get_config("dummy", "tiny").target_tree(2))
+    save_pretrained(
+        wm.make("dummy", "tiny", action_dim=2), "upstream", config=wm.get_config("dummy", "tiny").target_tree(2)
+    )
     result = swm("show", "model", "upstream")
     assert result.exit_code == 0
     assert "DummyWorldModel" in result.stdout and "no protocol.json" in result.stdout

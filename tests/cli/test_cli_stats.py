@@ -29,6 +29,8 @@ def test_wilson_properties():
 
 
 def test_summary_from_evaluate_results():
-    s = SuccessSummary.from_results("p", {"episode_successes": np.array([True, False, True, True]), "episode_lengths": np.array([3, 10, 5, 4])})
+    s = SuccessSummary.from_results(
+        "p", {"episode_successes": np.array([True, False, True, True]), "episode_lengths": np.array([3, 10, 5, 4])}
+    )
     assert (s.episodes, s.successes, s.rate, s.mean_length) == (4, 3, 0.75, 5.5)
     assert s.interval == wilson_interval(3, 4)

@@ -10,8 +10,20 @@ import shutil
 import pytest
 
 TOY = "swm/Toy-v0"
-TINY = dict(image_size=16, embed_dim=8, cnn_width=8, depth=1, heads=2, dim_head=4, mlp_dim=16, projector_hidden=16,
-            sigreg_num_proj=16, batch_size=8, frameskip=1, history_size=1)
+TINY = dict(
+    image_size=16,
+    embed_dim=8,
+    cnn_width=8,
+    depth=1,
+    heads=2,
+    dim_head=4,
+    mlp_dim=16,
+    projector_hidden=16,
+    sigreg_num_proj=16,
+    batch_size=8,
+    frameskip=1,
+    history_size=1,
+)
 
 
 @pytest.fixture(scope="module")
@@ -27,7 +39,18 @@ def template(tmp_path_factory):
         with World(TOY, 1, (16, 16), max_episode_steps=20, verbose=0) as world:
             world.set_policy(expert_policy(TOY))
             world.record_dataset("toy", episodes=4, seed=0, cache_dir=root)
-        train("lewm", "toy", "tiny", steps=2, name="good", seed=0, device="cpu", progress=False, cache_dir=str(root), **TINY)
+        train(
+            "lewm",
+            "toy",
+            "tiny",
+            steps=2,
+            name="good",
+            seed=0,
+            device="cpu",
+            progress=False,
+            cache_dir=str(root),
+            **TINY,
+        )
     return root
 
 
@@ -48,8 +71,34 @@ def evil(template, _stablewm_home, tmp_path):
 @pytest.mark.parametrize(
     "args",
     [
-        ("eval", TOY, "--policy", "wm:evil", "--episodes", "1", "--max-steps", "2", "--device", "cpu", "--image-size", "16"),
-        ("eval", TOY, "--policy", "gc:evil", "--episodes", "1", "--max-steps", "2", "--device", "cpu", "--image-size", "16"),
+        (
+            "eval",
+            TOY,
+            "--policy",
+            "wm:evil",
+            "--episodes",
+            "1",
+            "--max-steps",
+            "2",
+            "--device",
+            "cpu",
+            "--image-size",
+            "16",
+        ),
+        (
+            "eval",
+            TOY,
+            "--policy",
+            "gc:evil",
+            "--episodes",
+            "1",
+            "--max-steps",
+            "2",
+            "--device",
+            "cpu",
+            "--image-size",
+            "16",
+        ),
         ("train", "frame", "--from", "evil", "--steps", "1", "--device", "cpu"),
     ],
     ids=["eval wm", "eval gc", "train frame"],

@@ -11,8 +11,10 @@ import pytest
 ray = pytest.importorskip("ray")
 
 #: what ray.init(address="auto") raises when no cluster runs on this machine (Ray 2.x)
-NO_CLUSTER = ("Could not find any running Ray instance. Please specify the one to connect to by setting "
-              "`--address` flag or `RAY_ADDRESS` environment variable.")
+NO_CLUSTER = (
+    "Could not find any running Ray instance. Please specify the one to connect to by setting "
+    "`--address` flag or `RAY_ADDRESS` environment variable."
+)
 
 
 @pytest.fixture

@@ -21,12 +21,35 @@ OTHER = "swm/TwoRoom-v2"  # 2-dim actions too
 WIDE = "swm/ImagePositioning-v1"  # 9-dim actions
 RUN = "toy-lewm"
 TINY = {
-    "image_size": 16, "embed_dim": 16, "cnn_width": 8, "depth": 1, "heads": 2, "dim_head": 8, "mlp_dim": 32,
-    "projector_hidden": 32, "sigreg_num_proj": 32, "batch_size": 8, "frameskip": 1,
+    "image_size": 16,
+    "embed_dim": 16,
+    "cnn_width": 8,
+    "depth": 1,
+    "heads": 2,
+    "dim_head": 8,
+    "mlp_dim": 32,
+    "projector_hidden": 32,
+    "sigreg_num_proj": 32,
+    "batch_size": 8,
+    "frameskip": 1,
 }
 #: one short episode, planned on the CPU with a small plan and no subgoal graph
-FAST = ("--episodes", "1", "--max-steps", "2", "--device", "cpu", "--samples", "4", "--iterations", "1", "--horizon", "2",
-        "--subgoals", "none")
+FAST = (
+    "--episodes",
+    "1",
+    "--max-steps",
+    "2",
+    "--device",
+    "cpu",
+    "--samples",
+    "4",
+    "--iterations",
+    "1",
+    "--horizon",
+    "2",
+    "--subgoals",
+    "none",
+)
 
 
 @pytest.fixture(scope="module")
@@ -83,7 +106,13 @@ def test_another_image_size_is_one_error_line_naming_both_and_the_fix(swm, home,
     result = swm("eval", TOY, "--policy", f"wm:{RUN}", "--image-size", "32", *FAST)
     assert result.exit_code == 1
     line = error_line(result)
-    for needle in (f"wm:{RUN} requires --image-size 16", "16x16 frames", "got --image-size 32", "drop --image-size", "--force"):
+    for needle in (
+        f"wm:{RUN} requires --image-size 16",
+        "16x16 frames",
+        "got --image-size 32",
+        "drop --image-size",
+        "--force",
+    ):
         assert needle in line, line
 
 
@@ -103,7 +132,12 @@ def test_another_action_dimension_is_one_error_line_even_with_force(swm, home, e
         result = swm("eval", WIDE, "--policy", f"wm:{RUN}", "--image-size", "16", *FAST, *extra)
         assert result.exit_code == 1
         line = error_line(result)
-        for needle in ("requires an env with 2-dim actions", f"got {WIDE} with 9-dim actions", "dataset 'toy'", "swm collect"):
+        for needle in (
+            "requires an env with 2-dim actions",
+            f"got {WIDE} with 9-dim actions",
+            "dataset 'toy'",
+            "swm collect",
+        ):
             assert needle in line, line
 
 
@@ -149,8 +183,17 @@ def test_the_env_of_a_dataset_recorded_on_ray_is_read_from_its_manifest(tmp_path
     from stable_worldmodel.planning.run_fit import RunFacts, check_run_fits
 
     (tmp_path / "manifest.json").write_text(json.dumps({"env": TOY, "episodes": 4}))
-    facts = RunFacts.from_protocol("r", {"dataset": "toy", "dataset_path": str(tmp_path), "action_dim": 2,
-                                         "dataset_image_shape": [16, 16, 3], "image_size": 16, "frameskip": 1})
+    facts = RunFacts.from_protocol(
+        "r",
+        {
+            "dataset": "toy",
+            "dataset_path": str(tmp_path),
+            "action_dim": 2,
+            "dataset_image_shape": [16, 16, 3],
+            "image_size": 16,
+            "frameskip": 1,
+        },
+    )
     assert facts.env == TOY and facts.frame_size == (16, 16)
     (line,) = check_run_fits(facts, "wm:r", env_id=OTHER, action_dim=2, image_size=16)
     assert TOY in line and OTHER in line

@@ -20,8 +20,16 @@ def calls(monkeypatch):
     def fake_train(model, dataset, preset="tiny", **kwargs):
         seen.append({"model": model, "dataset": dataset, "preset": preset, **kwargs})
         run = kwargs.get("name") or f"{dataset}-{model}"
-        return SimpleNamespace(run=run, folder=Path("/nowhere") / run, steps=1, seconds=0.0, samples_per_second=0.0,
-                               train_loss=0.0, val_loss=None, features=None)
+        return SimpleNamespace(
+            run=run,
+            folder=Path("/nowhere") / run,
+            steps=1,
+            seconds=0.0,
+            samples_per_second=0.0,
+            train_loss=0.0,
+            val_loss=None,
+            features=None,
+        )
 
     monkeypatch.setattr("stable_worldmodel.train.train", fake_train)
     return seen
@@ -52,9 +60,15 @@ def test_set_routes_to_the_flag(swm, calls, args, expected):
     [
         (("--lr", "0.1", "--set", "lr=0.2"), ["one value for lr", "--lr 0.1", "--set lr=0.2"]),
         (("--steps", "3", "--set", "steps=4"), ["one value for steps", "--steps 3", "--set steps=4"]),
-        (("--device", "cpu", "--set", "device=cuda"), ["one value for device", "--device 'cpu'", "--set device='cuda'"]),
+        (
+            ("--device", "cpu", "--set", "device=cuda"),
+            ["one value for device", "--device 'cpu'", "--set device='cuda'"],
+        ),
         (("--seed", "1", "--set", "seed=2"), ["one value for seed", "--seed 1", "--set seed=2"]),
-        (("--frameskip", "2", "--set", "frameskip=5"), ["one value for frameskip", "--frameskip 2", "--set frameskip=5"]),
+        (
+            ("--frameskip", "2", "--set", "frameskip=5"),
+            ["one value for frameskip", "--frameskip 2", "--set frameskip=5"],
+        ),
         (("--set", "model=pldm"), ["one value for model", "MODEL 'lewm'", "--set model='pldm'"]),
         (("--set", "steps=0"), ["--set steps requires an integer >= 1, got 0"]),
         (("--set", "lr=-1"), ["--set lr requires a number > 0, got '-1'"]),
@@ -82,8 +96,19 @@ def test_merge_settings_raises_a_config_error_naming_both():
 
 def test_set_lr_trains_with_that_lr(swm, record_toy, one_torch_thread):
     record_toy("toy", episodes=3)
-    tiny = ["image_size=16", "embed_dim=8", "cnn_width=8", "depth=1", "heads=2", "dim_head=4", "mlp_dim=16",
-            "projector_hidden=16", "sigreg_num_proj=16", "batch_size=4", "frameskip=1"]
+    tiny = [
+        "image_size=16",
+        "embed_dim=8",
+        "cnn_width=8",
+        "depth=1",
+        "heads=2",
+        "dim_head=4",
+        "mlp_dim=16",
+        "projector_hidden=16",
+        "sigreg_num_proj=16",
+        "batch_size=4",
+        "frameskip=1",
+    ]
     sets = [a for item in ("lr=0.01", "steps=1", *tiny) for a in ("--set", item)]
     result = swm("train", "lewm", "--dataset", "toy", "--name", "r", "--device", "cpu", *sets)
     assert result.exit_code == 0, result.output

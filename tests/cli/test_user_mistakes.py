@@ -45,7 +45,10 @@ def test_cache_folder_that_is_a_file(swm, error_line, a_file, monkeypatch):
         assert result.exit_code == 1 and "which is a file; point it at a folder" in error_line(result)
 
 
-@pytest.mark.parametrize(("name", "why"), [("../escape", "would leave the cache folder"), ("/abs/x", "an absolute path"), ("x.h5", "drop the")])
+@pytest.mark.parametrize(
+    ("name", "why"),
+    [("../escape", "would leave the cache folder"), ("/abs/x", "an absolute path"), ("x.h5", "drop the")],
+)
 def test_collect_name_that_escapes_the_cache(swm, error_line, name, why):
     result = swm("collect", "swm/Toy-v0", "--episodes", "1", "--name", name)
     assert result.exit_code == 1 and why in error_line(result)
@@ -84,7 +87,11 @@ def test_list_dataset_names_unfinished_first_recordings(swm, _stablewm_home):
     _stablewm_home.mkdir(parents=True, exist_ok=True)
     (_stablewm_home / ".killed.h5.partial").write_bytes(b"x")
     result = swm("list", "dataset")
-    assert result.exit_code == 0 and "Unfinished first recording" in result.output and ".killed.h5.partial" in result.output
+    assert (
+        result.exit_code == 0
+        and "Unfinished first recording" in result.output
+        and ".killed.h5.partial" in result.output
+    )
 
 
 def test_upstream_command_names(swm, _stablewm_home):

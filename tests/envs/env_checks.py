@@ -48,7 +48,7 @@ def assert_factor_changes_episode(env, name: str, rollout: Callable, seed: int =
         values.append(factor_value(env, name))
     value = max(values, key=lambda v: np.abs(v.astype(np.float64) - default).sum())
     out = rollout(env, seed, {keys.VARIATION_VALUES: {name: value}})
-    same = all(np.array_equal(a, b) for a, b in zip(ref, out))
+    same = all(np.array_equal(a, b) for a, b in zip(ref, out, strict=False))
     assert not same, f"factor {name} = {value} (default {default}) changed nothing"
 
 
@@ -77,7 +77,11 @@ def assert_expert_solves_in_world(env_id: str, num_envs: int, episodes: int, max
     import stable_worldmodel as swm
 
     world = swm.World(
-        env_id, num_envs=num_envs, image_shape=(64, 64), max_episode_steps=max_episode_steps, verbose=0,
+        env_id,
+        num_envs=num_envs,
+        image_shape=(64, 64),
+        max_episode_steps=max_episode_steps,
+        verbose=0,
         vectorization_mode="sync",
     )
     world.set_policy(swm.envs.expert_policy(env_id))

@@ -13,13 +13,15 @@ import pytest
 
 from stable_worldmodel._optional import is_available
 
-if not (is_available("mujoco") and is_available("dm_control")):  # find_spec: mujoco must not be imported before its GL setup
+if not (
+    is_available("mujoco") and is_available("dm_control")
+):  # find_spec: mujoco must not be imported before its GL setup
     pytest.skip("extra 'mujoco' not installed", allow_module_level=True)
 
 import gymnasium as gym  # noqa: E402
+from env_checks import assert_factor_changes_episode  # noqa: E402
 
 import stable_worldmodel as swm  # noqa: E402
-from env_checks import assert_factor_changes_episode  # noqa: E402
 from stable_worldmodel import keys  # noqa: E402
 from stable_worldmodel.envs import dmcontrol  # noqa: E402
 from stable_worldmodel.errors import ConfigError, DependencyNotInstalled, SpaceError, UnknownNameError  # noqa: E402
@@ -32,46 +34,206 @@ AGENT = ("box", (3,), F64, 0.0, 1.0, [0.7, 0.5, 0.3])
 TARGET = ("box", (3,), F64, 0.0, 1.0, [0.6, 0.3, 0.3])
 FLOOR = {"floor.color": ("box", (2, 3), F64, 0.0, 1.0, [[0.1, 0.2, 0.3], [0.2, 0.3, 0.4]])}
 FRICTION = {"floor.friction": ("box", (1,), F32, 0.0, 1.0, 1.0)}
-GRAVITY = {"gravity.x": ("box", (1,), F64, -5.0, 5.0, 0.0), "gravity.y": ("box", (1,), F64, -5.0, 5.0, 0.0),
-           "gravity.z": ("box", (1,), F64, -20.0, 0.0, -9.81)}
+GRAVITY = {
+    "gravity.x": ("box", (1,), F64, -5.0, 5.0, 0.0),
+    "gravity.y": ("box", (1,), F64, -5.0, 5.0, 0.0),
+    "gravity.z": ("box", (1,), F64, -20.0, 0.0, -9.81),
+}
 LIGHT = {"light.intensity": ("box", (1,), F64, 0.0, 1.0, 0.7)}
 TARGETS = {"target.color": TARGET, "target.shape": SWITCH}
 RENDER = {"rendering.render_target": ("discrete", 2, 0)}
 UPSTREAM = {  # name: (obs dim, action dim, factors in upstream's order, extra info keys)
-    "Humanoid": (67, 21, {"agent.color": AGENT, "agent.left_knee_locked": SWITCH, "agent.right_lower_arm_density": DENSITY,
-                          "agent.torso_density": DENSITY, **FLOOR, **FRICTION, **GRAVITY, **LIGHT},
-                 ("speed", "torso_upright", "head_height")),
-    "Cheetah": (17, 6, {"agent.back_foot_density": DENSITY, "agent.back_foot_locked": SWITCH, "agent.color": AGENT,
-                        "agent.torso_density": DENSITY, **FLOOR, **FRICTION, **GRAVITY, **LIGHT},
-                ("speed", "torso_height", "bfoot_height", "ffoot_height", "angmomentum")),
-    "Hopper": (15, 4, {"agent.color": AGENT, "agent.foot_density": DENSITY, "agent.foot_locked": SWITCH,
-                       "agent.torso_density": DENSITY, **FLOOR, **FRICTION, **GRAVITY, **LIGHT},
-               ("speed", "height", "angmomentum")),
-    "Reacher": (6, 2, {"agent.arm_density": DENSITY, "agent.color": AGENT, "agent.finger_density": DENSITY,
-                       "agent.finger_locked": SWITCH, **FLOOR, **LIGHT, **RENDER, **TARGETS}, ("target_pos", "finger_pos")),
-    "Walker": (24, 6, {"agent.color": AGENT, "agent.left_foot_density": DENSITY, "agent.right_knee_locked": SWITCH,
-                       "agent.torso_density": DENSITY, **FLOOR, **FRICTION,
-                       "floor.rotation_y": ("box", (1,), F64, -10.0, 10.0, 0.0), **GRAVITY, **LIGHT},
-               ("speed", "torso_height", "torso_upright", "left_foot_height", "right_foot_height", "left_thigh_height",
-                "right_thigh_height")),
-    "Acrobot": (6, 1, {"agent.color": AGENT, "agent.lower_arm_density": DENSITY, "agent.upper_arm_density": DENSITY,
-                       "agent.upper_arm_locked": SWITCH, **FLOOR, **GRAVITY, **LIGHT, **TARGETS}, ()),
-    "Pendulum": (3, 1, {"agent.color": AGENT, "agent.mass_density": DENSITY, "agent.mass_shape": SWITCH,
-                        "agent.pole_density": DENSITY, **FLOOR, **GRAVITY, **LIGHT}, ()),
-    "Cartpole": (5, 1, {"agent.cart_mass": ("box", (1,), F32, 0.5, 1.5, 1.0), "agent.cart_shape": SWITCH, "agent.color": AGENT,
-                        "agent.pole_density": DENSITY, **FLOOR, **GRAVITY, **LIGHT}, ()),
-    "BallInCup": (8, 2, {"agent.color": AGENT, "agent.density": DENSITY, "ball.color": AGENT, "ball.density": DENSITY,
-                         "ball.size": ("box", (1,), F32, 0.01, 0.05, 0.025), **FLOOR, **GRAVITY, **LIGHT, **RENDER, **TARGETS},
-                  ()),
-    "Finger": (12, 2, {"agent.color": AGENT, "agent.fingertip_density": DENSITY, "agent.proximal_density": DENSITY, **FLOOR,
-                       **LIGHT, **RENDER, "spinner.color": AGENT, "spinner.density": DENSITY,
-                       "spinner.friction": ("box", (1,), F32, 0.0, 1.0, 0.1), **TARGETS},
-               ("hinge_velocity", "target_position", "tip_position")),
-    "Manipulator": (44, 5, {"agent.color": AGENT, "agent.hand_density": DENSITY, "agent.upper_arm_density": DENSITY,
-                            "agent.upper_arm_length": DENSITY, **FLOOR, **LIGHT, **RENDER, **TARGETS}, ()),
-    "Quadruped": (78, 12, {"agent.color": ("box", (3,), F64, 0.0, 1.0, [0.6, 0.3, 0.3]),
-                           "agent.foot_back_left_density": DENSITY, "agent.knee_back_left_locked": SWITCH,
-                           "agent.torso_density": DENSITY, **FLOOR, **FRICTION, **GRAVITY, **LIGHT}, ("torso_velocity",)),
+    "Humanoid": (
+        67,
+        21,
+        {
+            "agent.color": AGENT,
+            "agent.left_knee_locked": SWITCH,
+            "agent.right_lower_arm_density": DENSITY,
+            "agent.torso_density": DENSITY,
+            **FLOOR,
+            **FRICTION,
+            **GRAVITY,
+            **LIGHT,
+        },
+        ("speed", "torso_upright", "head_height"),
+    ),
+    "Cheetah": (
+        17,
+        6,
+        {
+            "agent.back_foot_density": DENSITY,
+            "agent.back_foot_locked": SWITCH,
+            "agent.color": AGENT,
+            "agent.torso_density": DENSITY,
+            **FLOOR,
+            **FRICTION,
+            **GRAVITY,
+            **LIGHT,
+        },
+        ("speed", "torso_height", "bfoot_height", "ffoot_height", "angmomentum"),
+    ),
+    "Hopper": (
+        15,
+        4,
+        {
+            "agent.color": AGENT,
+            "agent.foot_density": DENSITY,
+            "agent.foot_locked": SWITCH,
+            "agent.torso_density": DENSITY,
+            **FLOOR,
+            **FRICTION,
+            **GRAVITY,
+            **LIGHT,
+        },
+        ("speed", "height", "angmomentum"),
+    ),
+    "Reacher": (
+        6,
+        2,
+        {
+            "agent.arm_density": DENSITY,
+            "agent.color": AGENT,
+            "agent.finger_density": DENSITY,
+            "agent.finger_locked": SWITCH,
+            **FLOOR,
+            **LIGHT,
+            **RENDER,
+            **TARGETS,
+        },
+        ("target_pos", "finger_pos"),
+    ),
+    "Walker": (
+        24,
+        6,
+        {
+            "agent.color": AGENT,
+            "agent.left_foot_density": DENSITY,
+            "agent.right_knee_locked": SWITCH,
+            "agent.torso_density": DENSITY,
+            **FLOOR,
+            **FRICTION,
+            "floor.rotation_y": ("box", (1,), F64, -10.0, 10.0, 0.0),
+            **GRAVITY,
+            **LIGHT,
+        },
+        (
+            "speed",
+            "torso_height",
+            "torso_upright",
+            "left_foot_height",
+            "right_foot_height",
+            "left_thigh_height",
+            "right_thigh_height",
+        ),
+    ),
+    "Acrobot": (
+        6,
+        1,
+        {
+            "agent.color": AGENT,
+            "agent.lower_arm_density": DENSITY,
+            "agent.upper_arm_density": DENSITY,
+            "agent.upper_arm_locked": SWITCH,
+            **FLOOR,
+            **GRAVITY,
+            **LIGHT,
+            **TARGETS,
+        },
+        (),
+    ),
+    "Pendulum": (
+        3,
+        1,
+        {
+            "agent.color": AGENT,
+            "agent.mass_density": DENSITY,
+            "agent.mass_shape": SWITCH,
+            "agent.pole_density": DENSITY,
+            **FLOOR,
+            **GRAVITY,
+            **LIGHT,
+        },
+        (),
+    ),
+    "Cartpole": (
+        5,
+        1,
+        {
+            "agent.cart_mass": ("box", (1,), F32, 0.5, 1.5, 1.0),
+            "agent.cart_shape": SWITCH,
+            "agent.color": AGENT,
+            "agent.pole_density": DENSITY,
+            **FLOOR,
+            **GRAVITY,
+            **LIGHT,
+        },
+        (),
+    ),
+    "BallInCup": (
+        8,
+        2,
+        {
+            "agent.color": AGENT,
+            "agent.density": DENSITY,
+            "ball.color": AGENT,
+            "ball.density": DENSITY,
+            "ball.size": ("box", (1,), F32, 0.01, 0.05, 0.025),
+            **FLOOR,
+            **GRAVITY,
+            **LIGHT,
+            **RENDER,
+            **TARGETS,
+        },
+        (),
+    ),
+    "Finger": (
+        12,
+        2,
+        {
+            "agent.color": AGENT,
+            "agent.fingertip_density": DENSITY,
+            "agent.proximal_density": DENSITY,
+            **FLOOR,
+            **LIGHT,
+            **RENDER,
+            "spinner.color": AGENT,
+            "spinner.density": DENSITY,
+            "spinner.friction": ("box", (1,), F32, 0.0, 1.0, 0.1),
+            **TARGETS,
+        },
+        ("hinge_velocity", "target_position", "tip_position"),
+    ),
+    "Manipulator": (
+        44,
+        5,
+        {
+            "agent.color": AGENT,
+            "agent.hand_density": DENSITY,
+            "agent.upper_arm_density": DENSITY,
+            "agent.upper_arm_length": DENSITY,
+            **FLOOR,
+            **LIGHT,
+            **RENDER,
+            **TARGETS,
+        },
+        (),
+    ),
+    "Quadruped": (
+        78,
+        12,
+        {
+            "agent.color": ("box", (3,), F64, 0.0, 1.0, [0.6, 0.3, 0.3]),
+            "agent.foot_back_left_density": DENSITY,
+            "agent.knee_back_left_locked": SWITCH,
+            "agent.torso_density": DENSITY,
+            **FLOOR,
+            **FRICTION,
+            **GRAVITY,
+            **LIGHT,
+        },
+        ("torso_velocity",),
+    ),
 }
 UPSTREAM_INFO = ("env_name", "success", "qpos", "qvel", "score")
 _ENVS: dict = {}
@@ -111,12 +273,22 @@ def test_spaces_info_and_step_match_upstream(name):
             shape, dtype, low, high, init = spec
             assert space.shape == shape and space.dtype == dtype, factor
             assert np.all(space.low == np.asarray(low, dtype)) and np.all(space.high == np.asarray(high, dtype)), factor
-            np.testing.assert_allclose(space.init_value, np.broadcast_to(np.asarray(init, dtype), shape), err_msg=factor)
+            np.testing.assert_allclose(
+                space.init_value, np.broadcast_to(np.asarray(init, dtype), shape), err_msg=factor
+            )
     obs, info = env.reset(seed=0)
     assert obs.shape == (n_obs,) and obs.dtype == np.float32
     obs, reward, terminated, truncated, info = env.step(np.zeros(n_act))
     assert isinstance(reward, float) and not terminated and not truncated
-    assert set(info) >= {*UPSTREAM_INFO, *extra, keys.STATE, keys.PROPRIO, keys.GOAL, keys.GOAL_STATE, keys.GOAL_PROPRIO}
+    assert set(info) >= {
+        *UPSTREAM_INFO,
+        *extra,
+        keys.STATE,
+        keys.PROPRIO,
+        keys.GOAL,
+        keys.GOAL_STATE,
+        keys.GOAL_PROPRIO,
+    }
     m = env.model
     assert info[keys.STATE].shape == (m.nq + m.nv + m.na,) and info[keys.GOAL].shape == (16, 16, 3)
     assert info["env_name"] == name and info["score"] == pytest.approx(reward / 1000)
@@ -144,12 +316,14 @@ def test_reset_matches_dm_control_and_is_reproducible():
 
     everything = {keys.VARIATION: ["all"]}
     a, b = episode(env, 3, everything), episode(make("Cartpole", render_quality="medium"), 3, everything)
-    for x, y in zip(a, b):
+    for x, y in zip(a, b, strict=False):
         np.testing.assert_array_equal(x, y)
     assert not np.array_equal(a[1], episode(env, 4, everything)[1])
     np.testing.assert_array_equal(episode(env, 5, follow=True)[1], episode(env, 5, follow=True)[1])
     seeded = make("Cartpole", seed=11)
-    np.testing.assert_array_equal(seeded.reset()[0], env.reset(seed=11)[0])  # the constructor's seed seeds the first reset
+    np.testing.assert_array_equal(
+        seeded.reset()[0], env.reset(seed=11)[0]
+    )  # the constructor's seed seeds the first reset
 
 
 def test_episodes_go_on_unless_a_time_limit_is_given():
@@ -189,14 +363,27 @@ def _states(env, seed, options):
 
 
 FRAME_FACTORS = [
-    ("Cartpole", "agent.color"), ("Cartpole", "floor.color"), ("Cartpole", "light.intensity"), ("Cartpole", "agent.cart_shape"),
-    ("Reacher", "target.color"), ("Reacher", "target.shape"), ("Reacher", "rendering.render_target"),
-    ("Finger", "spinner.color"), ("BallInCup", "ball.color"),
+    ("Cartpole", "agent.color"),
+    ("Cartpole", "floor.color"),
+    ("Cartpole", "light.intensity"),
+    ("Cartpole", "agent.cart_shape"),
+    ("Reacher", "target.color"),
+    ("Reacher", "target.shape"),
+    ("Reacher", "rendering.render_target"),
+    ("Finger", "spinner.color"),
+    ("BallInCup", "ball.color"),
 ]
 STATE_FACTORS = [
-    ("Cartpole", "gravity.z"), ("Cartpole", "gravity.x"), ("Cartpole", "agent.cart_mass"), ("Cartpole", "agent.pole_density"),
-    ("Pendulum", "agent.mass_density"), ("Cheetah", "floor.friction"), ("Cheetah", "agent.torso_density"),
-    ("Walker", "floor.rotation_y"), ("BallInCup", "ball.size"), ("Finger", "spinner.friction"),
+    ("Cartpole", "gravity.z"),
+    ("Cartpole", "gravity.x"),
+    ("Cartpole", "agent.cart_mass"),
+    ("Cartpole", "agent.pole_density"),
+    ("Pendulum", "agent.mass_density"),
+    ("Cheetah", "floor.friction"),
+    ("Cheetah", "agent.torso_density"),
+    ("Walker", "floor.rotation_y"),
+    ("BallInCup", "ball.size"),
+    ("Finger", "spinner.friction"),
 ]
 
 
@@ -247,7 +434,9 @@ def test_reset_from_dataset_rows_restores_state_and_goal(name):
     _, info = env.reset(seed=2, options={keys.VARIATION: ["agent.color"]})
     rows = []
     for _ in range(4):
-        rows.append({keys.STATE: info[keys.STATE], "variation.agent.color": env.variation_space["agent"]["color"].value})
+        rows.append(
+            {keys.STATE: info[keys.STATE], "variation.agent.color": env.variation_space["agent"]["color"].value}
+        )
         _, _, _, _, info = env.step(np.full(env.action_space.shape, 0.3))
     other = make(name, render_quality="medium")
     other.set_render_size((16, 16))
@@ -389,6 +578,8 @@ def test_expert_policy_runs_a_sac_checkpoint(tmp_path, monkeypatch):
 
 
 def test_importing_the_package_is_light():
-    code = "import sys, stable_worldmodel.envs.dmcontrol as d; print('mujoco' in sys.modules, 'dm_control' in sys.modules)"
+    code = (
+        "import sys, stable_worldmodel.envs.dmcontrol as d; print('mujoco' in sys.modules, 'dm_control' in sys.modules)"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert out.stdout.split() == ["False", "False"], out.stderr

@@ -88,8 +88,14 @@ def test_pusht_render_goal_factor_of_upstream():
 
 # upstream 0.1.1's gym.make("swm/PushT-v1").reset(seed=s): (obs["state"], info["goal_state"]) rounded to 1e-4
 UP_SEEDED_RESETS = {
-    0: ([235.7827, 303.6074, 383.7718, 318.036, 4.9695, 0.0, 0.0], [449.7421, 228.0397, 151.3813, 309.2775, 0.2837, 0.0, 0.0]),
-    3: ([138.4352, 362.7003, 130.6711, 234.4672, 1.4122, 0.0, 0.0], [352.3057, 98.8365, 346.6426, 163.293, 5.061, 0.0, 0.0]),
+    0: (
+        [235.7827, 303.6074, 383.7718, 318.036, 4.9695, 0.0, 0.0],
+        [449.7421, 228.0397, 151.3813, 309.2775, 0.2837, 0.0, 0.0],
+    ),
+    3: (
+        [138.4352, 362.7003, 130.6711, 234.4672, 1.4122, 0.0, 0.0],
+        [352.3057, 98.8365, 346.6426, 163.293, 5.061, 0.0, 0.0],
+    ),
 }
 
 
@@ -106,7 +112,9 @@ def test_pusht_v1_all_factors_drawn_as_upstream():
     obs, _ = env.reset(seed=7, options={"variation": ["all"]})
     vs = env.unwrapped.variation_space
     assert vs["agent"]["color"].value.tolist() == [229, 204, 43] and int(vs["block"]["shape"].value) == 3
-    np.testing.assert_allclose(obs[keys.STATE], [176.2336, 116.8658, 390.8437, 302.4224, 5.9023, 186.3105, 323.2808], atol=1e-4)
+    np.testing.assert_allclose(
+        obs[keys.STATE], [176.2336, 116.8658, 390.8437, 302.4224, 5.9023, 186.3105, 323.2808], atol=1e-4
+    )
 
 
 def test_pusht_v1_unseeded_reset_follows_the_env_seed():
@@ -119,10 +127,22 @@ def test_pusht_v1_unseeded_reset_follows_the_env_seed():
 
 # -- TwoRoom-v0 (release 0.0.3) ---------------------------------------------------------------------
 V0_FACTORS = {  # name: default of 0.0.3
-    "agent.color": [255, 0, 0], "agent.radius": [15.0], "agent.position": [50.0, 50.0], "agent.max_energy": 100,
-    "agent.speed": [10.0], "goal.color": [0, 255, 0], "goal.radius": [15.0], "goal.position": [450.0, 450.0],
-    "wall.color": [115, 127, 145], "wall.thickness": 19, "wall.axis": 1, "wall.border_color": [180, 189, 204],
-    "door.color": [255, 255, 255], "door.number": 1, "door.size": [75, 75, 75], "door.position": [247, 247, 247],
+    "agent.color": [255, 0, 0],
+    "agent.radius": [15.0],
+    "agent.position": [50.0, 50.0],
+    "agent.max_energy": 100,
+    "agent.speed": [10.0],
+    "goal.color": [0, 255, 0],
+    "goal.radius": [15.0],
+    "goal.position": [450.0, 450.0],
+    "wall.color": [115, 127, 145],
+    "wall.thickness": 19,
+    "wall.axis": 1,
+    "wall.border_color": [180, 189, 204],
+    "door.color": [255, 255, 255],
+    "door.number": 1,
+    "door.size": [75, 75, 75],
+    "door.position": [247, 247, 247],
     "background.color": [255, 255, 255],
 }
 # 0.0.3 with the default layout: start, goal, actions -> final state, terminated per step
@@ -136,10 +156,14 @@ UP_NEAR_FRACTIONS = [0.5434886215028857, 0.7053920771706806, 0.872784787456714]
 UP_WALL_CONTACTS = [0] * 7 + [1] * 13
 # 0.0.3's last "wall" frame at 64x64, grey level averaged over 8x8 blocks
 UP_WALL_FRAME_BLOCKS = [
-    [240.0, 247.0, 247.0, 217.8, 247.0, 247.0, 247.0, 240.0], [247.0, 255.0, 255.0, 204.2, 255.0, 255.0, 255.0, 247.0],
-    [247.0, 255.0, 255.0, 222.0, 255.0, 255.0, 255.0, 247.0], [247.0, 255.0, 255.0, 222.0, 255.0, 255.0, 255.0, 247.0],
-    [247.0, 255.0, 255.0, 255.0, 255.0, 255.0, 225.8, 247.0], [247.0, 255.0, 255.0, 229.8, 255.0, 255.0, 255.0, 247.0],
-    [247.0, 255.0, 255.0, 222.0, 255.0, 255.0, 255.0, 247.0], [240.0, 247.0, 247.0, 218.2, 247.0, 247.0, 247.0, 240.0],
+    [240.0, 247.0, 247.0, 217.8, 247.0, 247.0, 247.0, 240.0],
+    [247.0, 255.0, 255.0, 204.2, 255.0, 255.0, 255.0, 247.0],
+    [247.0, 255.0, 255.0, 222.0, 255.0, 255.0, 255.0, 247.0],
+    [247.0, 255.0, 255.0, 222.0, 255.0, 255.0, 255.0, 247.0],
+    [247.0, 255.0, 255.0, 255.0, 255.0, 255.0, 225.8, 247.0],
+    [247.0, 255.0, 255.0, 229.8, 255.0, 255.0, 255.0, 247.0],
+    [247.0, 255.0, 255.0, 222.0, 255.0, 255.0, 255.0, 247.0],
+    [240.0, 247.0, 247.0, 218.2, 247.0, 247.0, 247.0, 240.0],
 ]
 
 
@@ -177,8 +201,19 @@ def test_two_room_v0_is_registered_with_0_0_3_spaces_and_factors():
 def test_two_room_v0_matches_0_0_3_trajectories(name):
     start, goal, action, steps, final, success = V0_RUNS[name]
     env, obs, info = _v0(start, goal)
-    assert set(info) >= {"pos_agent", "pos_goal", "n_contacts", "goal_pos", keys.GOAL, "energy", "max_energy",
-                         "fraction_of_goal", "fraction_of_agent", keys.GOAL_STATE, keys.GOAL_PROPRIO}
+    assert set(info) >= {
+        "pos_agent",
+        "pos_goal",
+        "n_contacts",
+        "goal_pos",
+        keys.GOAL,
+        "energy",
+        "max_energy",
+        "fraction_of_goal",
+        "fraction_of_agent",
+        keys.GOAL_STATE,
+        keys.GOAL_PROPRIO,
+    }
     np.testing.assert_array_equal(obs[keys.PROPRIO], obs[keys.STATE][[0, 1, 4, 5]])
     terms, rewards = [], []
     for _ in range(steps):
@@ -276,7 +311,10 @@ MAX_MAD = 3.0  # mean absolute difference per pixel channel, out of 255
 def _v1_values(values):
     if not values:
         return None
-    return {k: np.asarray(v, np.uint8 if k.endswith("color") else np.float32 if k.endswith("scale") else None) for k, v in values.items()}
+    return {
+        k: np.asarray(v, np.uint8 if k.endswith("color") else np.float32 if k.endswith("scale") else None)
+        for k, v in values.items()
+    }
 
 
 def _v1_run(case, size):
@@ -285,12 +323,23 @@ def _v1_run(case, size):
     if V1_META[case + "/values"]:
         options[keys.VARIATION_VALUES] = _v1_values(V1_META[case + "/values"])
     obs, info = env.reset(seed=0, options=options)
-    out = {"states": [obs[keys.STATE]], "rewards": [], "terminated": [], "n_contacts": [info[N_CONTACTS]], "frames": [env.render()]}
+    out = {
+        "states": [obs[keys.STATE]],
+        "rewards": [],
+        "terminated": [],
+        "n_contacts": [info[N_CONTACTS]],
+        "frames": [env.render()],
+    }
     goal = info[keys.GOAL]
     for action in V1[case + "/actions"]:
         obs, reward, terminated, truncated, info = env.step(action)
         assert truncated is False
-        for key, value in (("states", obs[keys.STATE]), ("rewards", reward), ("terminated", terminated), ("n_contacts", info[N_CONTACTS])):
+        for key, value in (
+            ("states", obs[keys.STATE]),
+            ("rewards", reward),
+            ("terminated", terminated),
+            ("n_contacts", info[N_CONTACTS]),
+        ):
             out[key].append(value)
         out["frames"].append(env.render())
     return {k: np.asarray(v) for k, v in out.items()}, goal
@@ -316,7 +365,7 @@ def test_pusht_v1_replays_upstream_states_rewards_success_and_contacts(case):
 @pytest.mark.parametrize("case", ["PushT-v1/push", "PushT-v1/colors", "PushT-v1/shape_plus", "PushT-Discrete-v1/grid"])
 def test_pusht_v1_frames_at_224_look_like_upstream(case):
     run, _ = _v1_run(case, 224)
-    for mine, theirs in zip(run["frames"][[0, -1]], V1[case + "/frames@224"]):
+    for mine, theirs in zip(run["frames"][[0, -1]], V1[case + "/frames@224"], strict=False):
         assert mine.shape == (224, 224, 3)
         assert _mad(mine, theirs) <= MAX_MAD
 
@@ -339,7 +388,9 @@ def test_pusht_v1_factors_match_upstream():
     for name, ref in V1_META["factors"].items():
         leaf = space[name.split(".")[0]][name.split(".")[1]]
         assert type(leaf).__name__ == ref["type"], name
-        np.testing.assert_allclose(np.asarray(leaf.init_value, np.float64), np.asarray(ref["default"], np.float64), err_msg=name)
+        np.testing.assert_allclose(
+            np.asarray(leaf.init_value, np.float64), np.asarray(ref["default"], np.float64), err_msg=name
+        )
         if "low" in ref:
             np.testing.assert_allclose(leaf.low, ref["low"], err_msg=name)
             np.testing.assert_allclose(leaf.high, ref["high"], err_msg=name)
@@ -390,6 +441,8 @@ def test_pusht_v2_keeps_our_design_and_v1_has_an_expert():
         expert = swm.envs.expert_policy(env_id)
         env = gym.make(env_id).unwrapped
         obs, info = env.reset(seed=0)
-        action = expert.get_action({keys.STATE: obs[keys.STATE][None, None], keys.GOAL_STATE: info[keys.GOAL_STATE][None, None]})
+        action = expert.get_action(
+            {keys.STATE: obs[keys.STATE][None, None], keys.GOAL_STATE: info[keys.GOAL_STATE][None, None]}
+        )
         assert action.shape == (1, 2) and action.dtype == shape_dtype
         env.step(action[0])

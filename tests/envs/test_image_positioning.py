@@ -5,9 +5,6 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 import pytest
-from gymnasium.utils.env_checker import check_env
-
-import stable_worldmodel  # noqa: F401  (registers swm/... ids)
 from env_checks import (
     assert_expert_solves_in_world,
     assert_factor_changes_episode,
@@ -15,6 +12,9 @@ from env_checks import (
     count_draws,
     run_actions,
 )
+from gymnasium.utils.env_checker import check_env
+
+import stable_worldmodel  # noqa: F401  (registers swm/... ids)
 from stable_worldmodel import keys
 from stable_worldmodel.envs.image_positioning.env import (
     ANGLE_TOLERANCE,
@@ -115,7 +115,7 @@ def test_same_seed_same_episode_bit_for_bit():
     env_a, env_b = make_env(), make_env()
     opts = {"variation": ["all"]}
     a, b = rollout(env_a, 7, opts), rollout(env_b, 7, opts)
-    for x, y in zip(a, b):
+    for x, y in zip(a, b, strict=False):
         np.testing.assert_array_equal(x, y)
     c = rollout(env_b, 8, opts)
     assert not np.array_equal(a[0], c[0])
@@ -124,9 +124,9 @@ def test_same_seed_same_episode_bit_for_bit():
 def test_image_set_is_procedural_and_seeded():
     a, b, c = make_sprites(3, 3), make_sprites.__wrapped__(3, 3), make_sprites(4, 3)
     assert len(a) == 3 and all(len(s.parts) >= 2 for s in a)  # the marker plus at least one shape
-    for x, y in zip(a, b):  # a pure function of (seed, n)
+    for x, y in zip(a, b, strict=False):  # a pure function of (seed, n)
         assert x.tile_color == y.tile_color
-        for (p, pc), (q, qc) in zip(x.parts, y.parts):
+        for (p, pc), (q, qc) in zip(x.parts, y.parts, strict=False):
             np.testing.assert_array_equal(p, q)
             assert pc == qc
     assert [s.tile_color for s in a] != [s.tile_color for s in c]

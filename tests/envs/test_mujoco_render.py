@@ -90,7 +90,9 @@ def test_render_quality_and_its_errors(scene):
     assert model.vis.quality.shadowsize == 4096  # the model's settings are restored
     assert np.abs(frames["medium"] - frames["high"]).mean() < 2.0  # the same picture
     assert np.abs(frames["low"] - frames["high"]).mean() > 2.0  # no shadows
-    with pytest.raises(ConfigError, match="render_quality in \\['low', 'medium', 'high'\\], got 'hihg'. Did you mean 'high'"):
+    with pytest.raises(
+        ConfigError, match="render_quality in \\['low', 'medium', 'high'\\], got 'hihg'. Did you mean 'high'"
+    ):
         mujoco_render.MjRenderer(model, 16, 16, "hihg")
 
 

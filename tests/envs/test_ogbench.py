@@ -26,8 +26,19 @@ from stable_worldmodel.envs.ogbench.scene_env import SceneEnv  # noqa: E402
 from stable_worldmodel.errors import ConfigError, SpaceError, UnknownNameError  # noqa: E402
 
 SIZE = (16, 16)
-CUBE_FACTORS = ["agent.color", "agent.ee_start_position", "camera.angle_delta", "cube.color", "cube.goal_position",
-                "cube.goal_yaw", "cube.size", "cube.start_position", "cube.start_yaw", "floor.color", "light.intensity"]
+CUBE_FACTORS = [
+    "agent.color",
+    "agent.ee_start_position",
+    "camera.angle_delta",
+    "cube.color",
+    "cube.goal_position",
+    "cube.goal_yaw",
+    "cube.size",
+    "cube.start_position",
+    "cube.start_yaw",
+    "floor.color",
+    "light.intensity",
+]
 
 
 def _small(cls):
@@ -289,7 +300,9 @@ def test_an_expert_cube_dataset_trains_lewm(tmp_path, monkeypatch):
     from stable_worldmodel.train import train
 
     monkeypatch.setenv("STABLEWM_HOME", str(tmp_path))
-    with World("swm/OGBCube-v0", 2, SIZE, max_episode_steps=12, verbose=0, vectorization_mode="sync", render_quality="low") as world:
+    with World(
+        "swm/OGBCube-v0", 2, SIZE, max_episode_steps=12, verbose=0, vectorization_mode="sync", render_quality="low"
+    ) as world:
         world.set_policy(expert_policy("swm/OGBCube-v0", noise=0.1, seed=0))
         world.record_dataset("cube", episodes=4, seed=0, cache_dir=tmp_path)
     data = HDF5Dataset("cube", cache_dir=tmp_path)
@@ -297,9 +310,29 @@ def test_an_expert_cube_dataset_trains_lewm(tmp_path, monkeypatch):
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
     try:
-        result = train("lewm", "cube", "tiny", steps=40, frameskip=1, device="cpu", seed=0, progress=False, cache_dir=str(tmp_path),
-                       log_every=5, image_size=16, embed_dim=16, cnn_width=8, depth=1, heads=2, dim_head=8, mlp_dim=32,
-                       projector_hidden=32, sigreg_num_proj=64, batch_size=8, warmup_steps=5)
+        result = train(
+            "lewm",
+            "cube",
+            "tiny",
+            steps=40,
+            frameskip=1,
+            device="cpu",
+            seed=0,
+            progress=False,
+            cache_dir=str(tmp_path),
+            log_every=5,
+            image_size=16,
+            embed_dim=16,
+            cnn_width=8,
+            depth=1,
+            heads=2,
+            dim_head=8,
+            mlp_dim=32,
+            projector_hidden=32,
+            sigreg_num_proj=64,
+            batch_size=8,
+            warmup_steps=5,
+        )
     finally:
         torch.set_num_threads(threads)
     losses = [r["train/loss"] for r in result.history if "train/loss" in r]

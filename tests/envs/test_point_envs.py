@@ -13,10 +13,10 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import pytest
+from env_checks import run_actions
 from gymnasium.utils.env_checker import check_env
 
 import stable_worldmodel as swm
-from env_checks import run_actions
 from stable_worldmodel import keys
 
 pytest.importorskip("cv2")
@@ -162,7 +162,10 @@ def test_render_size_and_cached_goal_image(env_id):
 def test_expert_noise_is_seeded_and_bounded(env_id):
     env = make(env_id)
     obs, info = env.reset(seed=0)
-    infos = {keys.STATE: np.tile(obs[keys.STATE], (3, 1, 1)), keys.GOAL_STATE: np.tile(info[keys.GOAL_STATE], (3, 1, 1))}
+    infos = {
+        keys.STATE: np.tile(obs[keys.STATE], (3, 1, 1)),
+        keys.GOAL_STATE: np.tile(info[keys.GOAL_STATE], (3, 1, 1)),
+    }
     a = swm.envs.expert_policy(env_id, noise=0.5, seed=1).get_action(infos)
     np.testing.assert_array_equal(a, swm.envs.expert_policy(env_id, noise=0.5, seed=1).get_action(infos))
     clean = swm.envs.expert_policy(env_id).get_action(infos)
@@ -172,9 +175,7 @@ def test_expert_noise_is_seeded_and_bounded(env_id):
 
 
 @pytest.mark.parametrize("env_id", CASES)
-@pytest.mark.parametrize(
-    "num_envs,mode", [(1, "sync"), (8, "sync"), pytest.param(8, "auto", marks=pytest.mark.slow)]
-)
+@pytest.mark.parametrize("num_envs,mode", [(1, "sync"), (8, "sync"), pytest.param(8, "auto", marks=pytest.mark.slow)])
 def test_world_evaluates_the_expert(env_id, num_envs, mode):
     with swm.World(
         env_id, num_envs=num_envs, image_shape=(64, 64), max_episode_steps=150, verbose=0, vectorization_mode=mode
@@ -185,7 +186,10 @@ def test_world_evaluates_the_expert(env_id, num_envs, mode):
         assert world.infos[keys.GOAL].shape == (num_envs, 1, 64, 64, 3)
 
 
-@pytest.mark.parametrize("module,names", [("two_room", "TwoRoomEnv TwoRoomExpert"), ("simple_point_maze", "SimplePointMazeEnv SimplePointMazeExpert")])
+@pytest.mark.parametrize(
+    "module,names",
+    [("two_room", "TwoRoomEnv TwoRoomExpert"), ("simple_point_maze", "SimplePointMazeEnv SimplePointMazeExpert")],
+)
 def test_package_exports_lazily_without_cv2(module, names):
     code = (
         f"import sys, stable_worldmodel.envs.{module} as m; assert 'cv2' not in sys.modules; "

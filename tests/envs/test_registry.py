@@ -8,21 +8,21 @@ import sys
 import gymnasium as gym
 import numpy as np
 import pytest
+from env_checks import run_actions
 from gymnasium.utils.env_checker import check_env
 
 import stable_worldmodel as swm
-from env_checks import run_actions
 from stable_worldmodel import keys
+from stable_worldmodel._optional import is_available
 from stable_worldmodel.envs import get_entry, list_envs, register_env
 from stable_worldmodel.envs.base import SupportsDatasetReset, SupportsEvalState, SupportsRenderSize
 from stable_worldmodel.errors import UnknownNameError
 
-from stable_worldmodel._optional import is_available
-
 MUJOCO = is_available("mujoco") and is_available("dm_control") and is_available("ogbench")
 ENVS = [
     pytest.param(e, marks=pytest.mark.skipif(not MUJOCO, reason="extra 'mujoco' not installed"))
-    if "mujoco" in get_entry(e).tags else e
+    if "mujoco" in get_entry(e).tags
+    else e
     for e in list_envs()
 ]
 
@@ -34,8 +34,14 @@ def fast(env_id: str) -> dict:
 
 
 def test_registry_lists_the_seed_envs():
-    for env_id in ("swm/PushT-v1", "swm/PushT-Discrete-v1", "swm/TwoRoom-v2", "swm/SimplePointMaze-v0",
-                   "swm/ImagePositioning-v1", "swm/VoidRun-v0"):
+    for env_id in (
+        "swm/PushT-v1",
+        "swm/PushT-Discrete-v1",
+        "swm/TwoRoom-v2",
+        "swm/SimplePointMaze-v0",
+        "swm/ImagePositioning-v1",
+        "swm/VoidRun-v0",
+    ):
         assert env_id in ENVS and env_id in gym.registry
         assert isinstance(gym.registry[env_id].entry_point, str)  # nothing imported to register
     assert "swm/PushT-v1" in list_envs(tag="paper") and "swm/VoidRun-v0" not in list_envs(tag="paper")
@@ -93,7 +99,9 @@ def test_env_smoke(env_id):
 @pytest.mark.parametrize("num_envs", [1, 8])
 @pytest.mark.parametrize("env_id", ENVS)
 def test_env_in_world_with_its_expert(env_id, num_envs):
-    world = swm.World(env_id, num_envs=num_envs, image_shape=(16, 16), verbose=0, vectorization_mode="sync", **fast(env_id))
+    world = swm.World(
+        env_id, num_envs=num_envs, image_shape=(16, 16), verbose=0, vectorization_mode="sync", **fast(env_id)
+    )
     has_expert = get_entry(env_id).expert is not None  # DMControl domains without a scripted one: random
     world.set_policy(swm.envs.expert_policy(env_id) if has_expert else swm.policy.RandomPolicy(seed=0))
     world.reset(seed=0)

@@ -141,10 +141,11 @@ def test_expert_reaches_the_goal(layout):
     for seed in range(3):
         obs, info = env.reset(seed=seed, options={"variation": ["all"], "variation_values": {"maze.layout": layout}})
         for _ in range(150):
-            action = expert.get_action({keys.STATE: obs[keys.STATE][None, None], keys.GOAL_STATE: info[keys.GOAL_STATE][None, None]})
+            action = expert.get_action(
+                {keys.STATE: obs[keys.STATE][None, None], keys.GOAL_STATE: info[keys.GOAL_STATE][None, None]}
+            )
             assert action.shape == (1, 2) and action.dtype == np.float32
             obs, _, terminated, _, info = env.step(action[0])
             if terminated:
                 break
         assert terminated, f"layout {layout} seed {seed}"
-

@@ -116,15 +116,14 @@ def test_expert_reaches_the_goal(options):
     for seed in range(4):
         obs, info = env.reset(seed=seed, options=options)
         for _ in range(100):
-            action = expert.get_action({keys.STATE: obs[keys.STATE][None, None], keys.GOAL_STATE: info[keys.GOAL_STATE][None, None]})
+            action = expert.get_action(
+                {keys.STATE: obs[keys.STATE][None, None], keys.GOAL_STATE: info[keys.GOAL_STATE][None, None]}
+            )
             assert action.shape == (1, 2) and action.dtype == np.float32
             obs, _, terminated, _, info = env.step(action[0])
             if terminated:
                 break
         assert terminated, f"seed {seed}"
-
-
-
 
 
 def test_position_only_state_keeps_the_default_geometry():

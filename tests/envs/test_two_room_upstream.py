@@ -20,10 +20,22 @@ from stable_worldmodel.errors import ConfigError
 REF = np.load(Path(__file__).parent / "data" / "two_room_v1_upstream.npz")
 CASES = {
     "default": None,
-    "doors": {"variation": ["agent.position", "target.position", "door.number", "door.size", "door.position",
-                            "agent.radius", "agent.speed"]},
+    "doors": {
+        "variation": [
+            "agent.position",
+            "target.position",
+            "door.number",
+            "door.size",
+            "door.position",
+            "agent.radius",
+            "agent.speed",
+        ]
+    },
     "all": {"variation": ["all"]},
-    "horizontal": {"variation": ["target.position"], "variation_values": {"wall.axis": 0, "agent.position": [60.0, 40.0]}},
+    "horizontal": {
+        "variation": ["target.position"],
+        "variation_values": {"wall.axis": 0, "agent.position": [60.0, 40.0]},
+    },
 }
 RUNS = [(case, seed) for case in CASES for seed in (0, 3)]
 FACTORS = {  # name -> (type, shape, low, high, default) as upstream 0.1.1 builds them
@@ -89,8 +101,16 @@ def test_replays_upstream(case, seed):
     env = make()
     obs, info = env.reset(seed=seed, options=CASES[case])
     vs = env.unwrapped.variation_space
-    for key in ("agent.radius", "agent.speed", "wall.axis", "wall.thickness", "door.number", "door.size",
-                "door.position", "agent.color"):
+    for key in (
+        "agent.radius",
+        "agent.speed",
+        "wall.axis",
+        "wall.thickness",
+        "door.number",
+        "door.size",
+        "door.position",
+        "agent.color",
+    ):
         group, leaf = key.split(".")
         np.testing.assert_array_equal(np.asarray(vs[group][leaf].value), REF[f"{name}/{key}"], err_msg=key)
     states, terms, frames = [obs], [], [env.render()]
@@ -133,7 +153,15 @@ def test_route_through_the_door_replays_upstream():
 def test_info_and_goal_image():
     env = make()
     _, info = env.reset(seed=1)
-    assert {"env_name", keys.STATE, keys.PROPRIO, keys.GOAL_STATE, keys.GOAL_PROPRIO, keys.GOAL, "distance_to_target"} <= set(info)
+    assert {
+        "env_name",
+        keys.STATE,
+        keys.PROPRIO,
+        keys.GOAL_STATE,
+        keys.GOAL_PROPRIO,
+        keys.GOAL,
+        "distance_to_target",
+    } <= set(info)
     assert info[keys.GOAL].shape == (224, 224, 3)
     # the goal image is the frame with the agent at the target
     env.unwrapped._set_state(info[keys.GOAL_STATE])
@@ -163,7 +191,9 @@ def test_expert_reaches_every_target():
     assert swm.envs.expert_policy("swm/TwoRoom-v1").__class__ is TwoRoomV1Expert
 
 
-@pytest.mark.parametrize(("env_id", "controller"), [("swm/TwoRoom-v1", TwoRoomV1Expert), ("swm/TwoRoom-v2", TwoRoomExpert)])
+@pytest.mark.parametrize(
+    ("env_id", "controller"), [("swm/TwoRoom-v1", TwoRoomV1Expert), ("swm/TwoRoom-v2", TwoRoomExpert)]
+)
 def test_upstream_expert_name_drives_the_env_it_is_set_on(env_id, controller):
     world = swm.World(env_id, num_envs=2, image_shape=(16, 16), max_episode_steps=100, verbose=0)
     policy = ExpertPolicy(seed=0, door_reach_tol=12.0)

@@ -5,9 +5,6 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 import pytest
-from gymnasium.utils.env_checker import check_env
-
-import stable_worldmodel  # noqa: F401  (registers swm/... ids)
 from env_checks import (
     assert_expert_solves_in_world,
     assert_factor_changes_episode,
@@ -15,6 +12,9 @@ from env_checks import (
     count_draws,
     run_actions,
 )
+from gymnasium.utils.env_checker import check_env
+
+import stable_worldmodel  # noqa: F401  (registers swm/... ids)
 from stable_worldmodel import keys
 from stable_worldmodel.envs.voidrun.env import DOWN, LEFT, RIGHT, UP, VoidRunEnv, shortest_path_lengths
 from stable_worldmodel.envs.voidrun.expert import VoidRunExpert
@@ -70,9 +70,7 @@ def test_reset_layout_leaves_a_path_and_keeps_start_and_goal():
     assert (~mask).sum() > 5  # holes were made
 
 
-@pytest.mark.parametrize(
-    "action,delta", [(LEFT, (-1, 0)), (RIGHT, (1, 0)), (DOWN, (0, 1)), (UP, (0, -1))]
-)
+@pytest.mark.parametrize("action,delta", [(LEFT, (-1, 0)), (RIGHT, (1, 0)), (DOWN, (0, 1)), (UP, (0, -1))])
 def test_action_numbering(action, delta):
     env = make_env()
     env.reset(seed=0, options={"state": open_floor(agent=(3, 3))})
@@ -164,7 +162,7 @@ def test_same_seed_same_episode_bit_for_bit():
     opts = {"variation": ["all"]}
     a = rollout(env_a, 7, opts)
     b = rollout(env_b, 7, opts)
-    for x, y in zip(a, b):
+    for x, y in zip(a, b, strict=False):
         np.testing.assert_array_equal(x, y)
     c = rollout(env_b, 8, opts)
     assert not np.array_equal(a[1], c[1])
@@ -194,7 +192,9 @@ def test_render_shows_breaking_and_goal_image_is_cached():
 
 def test_goal_image_shows_agent_on_goal():
     env = make_env()  # prob_break = 0: the floor after the step is the floor at reset
-    _, info = env.reset(seed=0, options={"state": open_floor(agent=(5, 6), goal=(6, 6)), "variation_values": {"prob_break": 0.0}})
+    _, info = env.reset(
+        seed=0, options={"state": open_floor(agent=(5, 6), goal=(6, 6)), "variation_values": {"prob_break": 0.0}}
+    )
     env.step(RIGHT)
     np.testing.assert_array_equal(env.render(), info[keys.GOAL])
 

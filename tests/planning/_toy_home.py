@@ -35,8 +35,18 @@ def toy_home(tmp_path_factory, prefix: str, runs: list[tuple[str, str, dict]]) -
                 world.set_policy(expert_policy(TOY))
                 world.record_dataset("toy", episodes=160, seed=0, options=HIDDEN_GOAL, cache_dir=root)
             for model, name, kwargs in runs:
-                train(model, "toy", "tiny", name=name, device="cpu", seed=0, progress=False, cache_dir=str(root),
-                      log_every=100, **kwargs)
+                train(
+                    model,
+                    "toy",
+                    "tiny",
+                    name=name,
+                    device="cpu",
+                    seed=0,
+                    progress=False,
+                    cache_dir=str(root),
+                    log_every=100,
+                    **kwargs,
+                )
         yield root
     finally:
         torch.set_num_threads(threads)

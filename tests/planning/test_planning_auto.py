@@ -56,7 +56,10 @@ def test_a_folder_resolves_to_its_one_checkpoint_only(tmp_path):
     assert AutoCostModel(tmp_path / "run" / "sub" / "epoch_2_object.ckpt").tag == 2  # a file path
     assert list_model_checkpoints(tmp_path) == ["run"]
     save(Wrapper(tag=3), tmp_path / "run" / "epoch_3_object.ckpt", mtime=3_000)
-    with pytest.raises(ConfigError, match=r"got 2 \*_object.ckpt files in .*run: epoch_1_object.ckpt, epoch_3_object.ckpt; pass the file"):
+    with pytest.raises(
+        ConfigError,
+        match=r"got 2 \*_object.ckpt files in .*run: epoch_1_object.ckpt, epoch_3_object.ckpt; pass the file",
+    ):
         AutoCostModel("run", cache_dir=tmp_path)  # no "newest wins" guess
     assert list_model_checkpoints(tmp_path) == []  # what is listed is what loads
 
@@ -169,7 +172,12 @@ def test_unknown_name_names_both_layouts_and_all_candidates(_stablewm_home):
     with pytest.raises(UnknownNameError) as err:
         AutoCostModel("runz")
     message = str(err.value)
-    assert "weights.pt" in message and "config.json" in message and "<user>/<repo>" in message and "_object.ckpt" in message
+    assert (
+        "weights.pt" in message
+        and "config.json" in message
+        and "<user>/<repo>" in message
+        and "_object.ckpt" in message
+    )
     assert "Did you mean 'runx'?" in message and "runx, tworoom" in message
     with pytest.raises(UnknownNameError, match="Did you mean 'tworoom'"):
         AutoCostModel("tworom")

@@ -8,16 +8,26 @@ frame). Its latent starts encoding the dot after ~400 steps here, hence 1000 (~2
 from __future__ import annotations
 
 import pytest
+from _toy_home import HIDDEN_GOAL, IMAGE, TOY, toy_home
 
 from stable_worldmodel import World
 from stable_worldmodel.planning.learned import PlanSettings, world_model_policy
 from stable_worldmodel.policy import RandomPolicy
 
-from _toy_home import HIDDEN_GOAL, IMAGE, TOY, toy_home
-
 EVAL_SEED = 10_000
-NET = dict(image_size=IMAGE, cnn_width=8, embed_dim=16, deter_dim=32, stoch_dim=8, hidden=32, history_size=1,
-           num_preds=2, frameskip=1, batch_size=32, warmup_steps=10)
+NET = dict(
+    image_size=IMAGE,
+    cnn_width=8,
+    embed_dim=16,
+    deter_dim=32,
+    stoch_dim=8,
+    hidden=32,
+    history_size=1,
+    num_preds=2,
+    frameskip=1,
+    batch_size=32,
+    warmup_steps=10,
+)
 
 
 @pytest.fixture(scope="module")
@@ -27,7 +37,9 @@ def home(tmp_path_factory):
 
 def test_planning_with_a_trained_dreamer_beats_random(home):
     def success_rate(policy) -> float:
-        with World(TOY, 4, (IMAGE, IMAGE), max_episode_steps=30, verbose=0, seed=EVAL_SEED, vectorization_mode="sync") as world:
+        with World(
+            TOY, 4, (IMAGE, IMAGE), max_episode_steps=30, verbose=0, seed=EVAL_SEED, vectorization_mode="sync"
+        ) as world:
             world.set_policy(policy)
             return world.evaluate(episodes=32, seed=EVAL_SEED, options=HIDDEN_GOAL)["success_rate"]
 

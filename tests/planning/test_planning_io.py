@@ -72,7 +72,9 @@ def test_transform_gets_image_batches_channels_first():
 
 
 def test_process_then_transform_order():
-    out = prepare_info({"state": np.ones((1, 1, 2))}, process={"state": Affine(3.0)}, transform={"state": lambda x: x - 1})
+    out = prepare_info(
+        {"state": np.ones((1, 1, 2))}, process={"state": Affine(3.0)}, transform={"state": lambda x: x - 1}
+    )
     assert torch.allclose(out["state"], torch.full((1, 1, 2), 2.0, dtype=torch.float64))
 
 

@@ -10,23 +10,31 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import torch
+from _toy_home import HIDDEN_GOAL, IMAGE, TOY, toy_home
 
 from stable_worldmodel import World, keys
 from stable_worldmodel.errors import ConfigError, UnknownNameError
 from stable_worldmodel.planning.learned import PlanSettings, world_model_policy
+from stable_worldmodel.policy import RandomPolicy
 from stable_worldmodel.solver import list_solvers
+from stable_worldmodel.wm.preprocess import Normalizer
 
 #: every registered solver that plans continuous actions (pgd relaxes discrete ones)
 SOLVERS = [name for name in list_solvers() if name != "pgd"]
-from stable_worldmodel.policy import RandomPolicy
-from stable_worldmodel.wm.preprocess import Normalizer
-
-from _toy_home import HIDDEN_GOAL, IMAGE, TOY, toy_home
 
 #: a width-8 CNN LeWM at 16x16 with a one-layer predictor
 TINY = dict(
-    image_size=IMAGE, embed_dim=16, cnn_width=8, depth=1, heads=2, dim_head=8, mlp_dim=32, projector_hidden=32,
-    sigreg_num_proj=256, batch_size=32, warmup_steps=10,
+    image_size=IMAGE,
+    embed_dim=16,
+    cnn_width=8,
+    depth=1,
+    heads=2,
+    dim_head=8,
+    mlp_dim=32,
+    projector_hidden=32,
+    sigreg_num_proj=256,
+    batch_size=32,
+    warmup_steps=10,
 )
 #: evaluation seeds, far from the recorded ones (0..159)
 EVAL_SEED = 10_000
@@ -35,13 +43,26 @@ EVAL_SEED = 10_000
 @pytest.fixture(scope="module")
 def home(tmp_path_factory):
     """A cache with dataset ``toy`` (160 expert episodes, 16x16) and checkpoints ``lewm`` / ``lewm-fs2``."""
-    yield from toy_home(tmp_path_factory, "stablewm_learned", [
-        ("lewm", "lewm", dict(steps=400, frameskip=1, **TINY)), ("lewm", "lewm-fs2", dict(steps=2, frameskip=2, **TINY))])
+    yield from toy_home(
+        tmp_path_factory,
+        "stablewm_learned",
+        [
+            ("lewm", "lewm", dict(steps=400, frameskip=1, **TINY)),
+            ("lewm", "lewm-fs2", dict(steps=2, frameskip=2, **TINY)),
+        ],
+    )
 
 
 def toy_world(num_envs: int = 2, max_episode_steps: int = 30) -> World:
-    return World(TOY, num_envs, (IMAGE, IMAGE), max_episode_steps=max_episode_steps, verbose=0, seed=EVAL_SEED,
-                 vectorization_mode="sync")
+    return World(
+        TOY,
+        num_envs,
+        (IMAGE, IMAGE),
+        max_episode_steps=max_episode_steps,
+        verbose=0,
+        seed=EVAL_SEED,
+        vectorization_mode="sync",
+    )
 
 
 def make(home, run: str = "lewm", **settings):
@@ -240,13 +261,21 @@ def test_subgoal_graph_is_built_from_the_training_split_and_redirects_the_goal(h
     assert graph["stride"] == 1 and graph["nodes"] == train_frames and graph["edges"] > graph["nodes"] / 2
     seen = []
     solve = policy.solver.solve
-    monkeypatch.setattr(policy.solver, "solve", lambda info, init_action=None: seen.append(info["goal_emb"].clone()) or solve(info, init_action))
+    monkeypatch.setattr(
+        policy.solver,
+        "solve",
+        lambda info, init_action=None: seen.append(info["goal_emb"].clone()) or solve(info, init_action),
+    )
     redirected = _planned_actions(policy)
     model = policy.solver.model
     with toy_world() as world:
         world.reset(seed=EVAL_SEED, options=HIDDEN_GOAL)
-        goal = model.encode_pixels(policy.transform[keys.GOAL](torch.as_tensor(world.infos[keys.GOAL][:, -1]).permute(0, 3, 1, 2)))
-    assert seen[0].shape == (2, 1, goal.shape[-1]) and not torch.allclose(seen[0][:, 0], goal)  # a waypoint, not the goal
+        goal = model.encode_pixels(
+            policy.transform[keys.GOAL](torch.as_tensor(world.infos[keys.GOAL][:, -1]).permute(0, 3, 1, 2))
+        )
+    assert seen[0].shape == (2, 1, goal.shape[-1]) and not torch.allclose(
+        seen[0][:, 0], goal
+    )  # a waypoint, not the goal
     far, _ = make(home, **settings, subgoals="graph", lookahead=10_000)
     plain, _ = make(home, **settings, subgoals="none")
     np.testing.assert_array_equal(_planned_actions(far), _planned_actions(plain))
@@ -264,7 +293,9 @@ def test_auto_subgoals_aim_at_waypoints_only_once_an_episode_stalls(home, monkey
     plain, _ = make(home, **settings, subgoals="none")
     np.testing.assert_array_equal(_planned_actions(auto), _planned_actions(plain))
     graph, _ = make(home, **settings, subgoals="graph")
-    monkeypatch.setattr(StallMonitor, "update", lambda self, current, goal, restarted=None: torch.ones(len(goal), dtype=torch.bool))
+    monkeypatch.setattr(
+        StallMonitor, "update", lambda self, current, goal, restarted=None: torch.ones(len(goal), dtype=torch.bool)
+    )
     stalled, _ = make(home, **settings)
     np.testing.assert_array_equal(_planned_actions(stalled), _planned_actions(graph))
     assert not np.array_equal(_planned_actions(stalled), _planned_actions(plain))

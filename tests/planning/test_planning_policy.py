@@ -11,9 +11,11 @@ from stable_worldmodel.errors import ConfigError, UnknownNameError
 from stable_worldmodel.policy import PlanConfig, WorldModelPolicy
 from stable_worldmodel.solver import CEMSolver, Solver
 
+BOX = gym.spaces.Box(-10.0, 10.0, (2,), np.float32)
+
 
 class FakeEnv:
-    def __init__(self, n=2, single=gym.spaces.Box(-10.0, 10.0, (2,), np.float32)):
+    def __init__(self, n=2, single=BOX):
         self.num_envs = n
         self.single_action_space = single
         self.action_space = gym.vector.utils.batch_space(single, n)

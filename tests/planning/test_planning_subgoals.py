@@ -20,7 +20,7 @@ STEP = 0.05
 def _walk(points: list[tuple[float, float]]) -> np.ndarray:
     """Points every STEP along the polyline through ``points``."""
     out = []
-    for (x0, y0), (x1, y1) in zip(points[:-1], points[1:]):
+    for (x0, y0), (x1, y1) in zip(points[:-1], points[1:], strict=False):
         n = max(int(np.hypot(x1 - x0, y1 - y0) / STEP), 1)
         t = np.arange(n)[:, None] / n
         out.append(np.array([x0, y0]) * (1 - t) + np.array([x1, y1]) * t)
@@ -111,7 +111,10 @@ def test_plan_settings_check_subgoals():
     assert PlanSettings(horizon=7, subgoals="graph", lookahead=5).as_dict()["lookahead"] == 5
     assert PlanSettings().subgoals == "auto" and PlanSettings().as_dict()["subgoals"] == "auto"
     for plain in (None, "none"):
-        assert PlanSettings(subgoals=plain).as_dict()["subgoals"] == "none" and "lookahead" not in PlanSettings(subgoals=plain).as_dict()
+        assert (
+            PlanSettings(subgoals=plain).as_dict()["subgoals"] == "none"
+            and "lookahead" not in PlanSettings(subgoals=plain).as_dict()
+        )
     assert PlanSettings(patience=7).as_dict()["patience"] == 7
     with pytest.raises(ConfigError, match="patience to be a positive int"):
         PlanSettings(patience=0)

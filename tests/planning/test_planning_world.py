@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import numpy as np
-import pytest
 import torch
 
 from stable_worldmodel import World
@@ -30,8 +29,14 @@ class ToyCost:
 
 
 def toy_world(num_envs=3, max_episode_steps=60):
-    return World("swm/Toy-v0", num_envs=num_envs, image_shape=(16, 16), max_episode_steps=max_episode_steps,
-                 verbose=0, vectorization_mode="sync")
+    return World(
+        "swm/Toy-v0",
+        num_envs=num_envs,
+        image_shape=(16, 16),
+        max_episode_steps=max_episode_steps,
+        verbose=0,
+        vectorization_mode="sync",
+    )
 
 
 def test_receding_horizon_inside_a_world():
@@ -103,8 +108,9 @@ class TwoRoomDynamics(torch.nn.Module):
 def test_two_room_goal_reached_with_ground_truth_dynamics():
     config = PlanConfig(horizon=5, receding_horizon=1, action_block=2)
     solver = CEMSolver(TwoRoomDynamics(), num_samples=64, n_steps=6, topk=8)
-    with World("swm/TwoRoom-v2", num_envs=4, image_shape=(16, 16), max_episode_steps=80, verbose=0,
-               vectorization_mode="sync") as world:
+    with World(
+        "swm/TwoRoom-v2", num_envs=4, image_shape=(16, 16), max_episode_steps=80, verbose=0, vectorization_mode="sync"
+    ) as world:
         world.set_policy(WorldModelPolicy(solver, config))
         result = world.evaluate(episodes=4, seed=3)
     assert result["success_rate"] >= 75

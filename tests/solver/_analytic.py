@@ -31,7 +31,9 @@ class DoubleWell:
 
 def configure(solver, n_envs=3, shape=(2,), low=-1.0, high=1.0, horizon=1, receding_horizon=1, action_block=1):
     space = gym.spaces.Box(low, high, (n_envs, *shape), np.float32)
-    solver.configure(action_space=space, n_envs=n_envs, config=PlanConfig(horizon, receding_horizon, action_block=action_block))
+    solver.configure(
+        action_space=space, n_envs=n_envs, config=PlanConfig(horizon, receding_horizon, action_block=action_block)
+    )
     return solver
 
 

@@ -175,12 +175,26 @@ def test_planning_cem_signature_is_upstreams():
 
     params = inspect.signature(PlanningCEM).parameters
     assert list(params) == [
-        "cost", "batch_size", "num_samples", "var_scale", "n_steps", "topk", "device", "seed", "callbacks"
+        "cost",
+        "batch_size",
+        "num_samples",
+        "var_scale",
+        "n_steps",
+        "topk",
+        "device",
+        "seed",
+        "callbacks",
     ]
     defaults = {name: p.default for name, p in params.items() if name != "cost"}
     assert defaults == {
-        "batch_size": 1, "num_samples": 300, "var_scale": 1, "n_steps": 30, "topk": 30,
-        "device": "cpu", "seed": 1234, "callbacks": None,
+        "batch_size": 1,
+        "num_samples": 300,
+        "var_scale": 1,
+        "n_steps": 30,
+        "topk": 30,
+        "device": "cpu",
+        "seed": 1234,
+        "callbacks": None,
     }
     from stable_worldmodel.planning.solver import CEMSolver as A
     from stable_worldmodel.planning.solver.cem import CEMSolver as B

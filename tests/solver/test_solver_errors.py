@@ -43,8 +43,21 @@ COMMON = [
     ({"device": True}, ["device", "got True"]),
 ]
 COMMON_IDS = [
-    "batch-str", "batch-float", "batch-bool", "batch-negative", "var-nan", "var-inf", "var-negative", "var-str",
-    "samples-0", "steps-negative", "device-bogus", "device-upper", "device-bad-index", "device-float", "device-bool",
+    "batch-str",
+    "batch-float",
+    "batch-bool",
+    "batch-negative",
+    "var-nan",
+    "var-inf",
+    "var-negative",
+    "var-str",
+    "samples-0",
+    "steps-negative",
+    "device-bogus",
+    "device-upper",
+    "device-bad-index",
+    "device-float",
+    "device-bool",
 ]
 
 

@@ -15,16 +15,34 @@ DATASET = "toy"
 EPISODES = 10
 #: a width-8 CNN world model at 16x16 with one predictor layer (LeWM, PLDM)
 NET = dict(
-    image_size=16, embed_dim=8, cnn_width=8, depth=1, heads=2, dim_head=4, mlp_dim=16, projector_hidden=16,
-    history_size=2, frameskip=1, warmup_steps=0,
+    image_size=16,
+    embed_dim=8,
+    cnn_width=8,
+    depth=1,
+    heads=2,
+    dim_head=4,
+    mlp_dim=16,
+    projector_hidden=16,
+    history_size=2,
+    frameskip=1,
+    warmup_steps=0,
 )
 #: what each model of the ``tiny`` preset needs on top of the preset to train in well under a second
 TINY = {
     "dummy": dict(image_size=16, frameskip=1, warmup_steps=0),
     "lewm": dict(NET, sigreg_num_proj=16),
     "pldm": dict(NET, idm_hidden=16),
-    "dreamer": dict(image_size=16, cnn_width=8, embed_dim=8, deter_dim=16, stoch_dim=4, hidden=16, history_size=2,
-                    frameskip=1, warmup_steps=0),
+    "dreamer": dict(
+        image_size=16,
+        cnn_width=8,
+        embed_dim=8,
+        deter_dim=16,
+        stoch_dim=4,
+        hidden=16,
+        history_size=2,
+        frameskip=1,
+        warmup_steps=0,
+    ),
 }
 
 
@@ -104,7 +122,9 @@ def graph_plan(monkeypatch):
         policy, protocol = world_model_policy(name, settings, device="cpu")
         seen = []
         solve = policy.solver.solve
-        monkeypatch.setattr(policy.solver, "solve", lambda info, init_action=None: seen.append(dict(info)) or solve(info, init_action))
+        monkeypatch.setattr(
+            policy.solver, "solve", lambda info, init_action=None: seen.append(dict(info)) or solve(info, init_action)
+        )
         with swm.World("swm/Toy-v0", 2, (16, 16), max_episode_steps=3, verbose=0, history_size=2) as world:
             world.set_policy(policy)
             assert world.evaluate(episodes=2, seed=0)["episode_count"] == 2

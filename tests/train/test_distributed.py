@@ -18,8 +18,19 @@ from stable_worldmodel.train import distributed
 
 GLOBAL_BATCH = 8
 #: a width-8 CNN world model at 16x16 with one predictor layer
-NET = dict(image_size=16, embed_dim=8, cnn_width=8, depth=1, heads=2, dim_head=4, mlp_dim=16, projector_hidden=16,
-           history_size=2, frameskip=1, warmup_steps=0)
+NET = dict(
+    image_size=16,
+    embed_dim=8,
+    cnn_width=8,
+    depth=1,
+    heads=2,
+    dim_head=4,
+    mlp_dim=16,
+    projector_hidden=16,
+    history_size=2,
+    frameskip=1,
+    warmup_steps=0,
+)
 
 # One process of the gradient check: the same seeded model and global batch everywhere, this
 # process's slice through DDP inside global_batch(), gradients written by rank 0.
@@ -74,8 +85,13 @@ def test_ddp_gradients_equal_single_process_gradients(model_name, tmp_path):
     env = {**os.environ, "MASTER_ADDR": "127.0.0.1", "MASTER_PORT": str(_free_port()), "OMP_NUM_THREADS": "1"}
     out = tmp_path / "ddp.pt"
     procs = [
-        subprocess.Popen([sys.executable, str(tmp_path / "worker.py"), str(r), "2", str(tmp_path), model_name, str(out)],
-                         env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        subprocess.Popen(
+            [sys.executable, str(tmp_path / "worker.py"), str(r), "2", str(tmp_path), model_name, str(out)],
+            env=env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+        )
         for r in range(2)
     ]
     logs = [p.communicate(timeout=120)[0] for p in procs]
@@ -115,13 +131,39 @@ def test_global_batch_must_divide(monkeypatch):
 def test_swm_train_under_torchrun_matches_a_single_process_run(toy, swm, _stablewm_home):
     """2 gloo processes and 1 process train the same steps on the same global batches: the
     weights agree, and only process 0 wrote metrics."""
-    args = ["train", "lewm", "--dataset", toy, "--steps", "4", "--batch-size", str(GLOBAL_BATCH), "--device", "cpu", "--seed", "0"]
+    args = [
+        "train",
+        "lewm",
+        "--dataset",
+        toy,
+        "--steps",
+        "4",
+        "--batch-size",
+        str(GLOBAL_BATCH),
+        "--device",
+        "cpu",
+        "--seed",
+        "0",
+    ]
     single = swm(*args, "--name", "one")
     assert single.exit_code == 0, single.output
     env = {**os.environ, "STABLEWM_HOME": str(_stablewm_home), "OMP_NUM_THREADS": "1"}
-    torchrun = [sys.executable, "-m", "torch.distributed.run", "--nproc-per-node", "2", "--master-port", str(_free_port())]
-    out = subprocess.run([*torchrun, "-m", "stable_worldmodel.cli", *args, "--name", "two"],
-                         env=env, capture_output=True, text=True, timeout=240)
+    torchrun = [
+        sys.executable,
+        "-m",
+        "torch.distributed.run",
+        "--nproc-per-node",
+        "2",
+        "--master-port",
+        str(_free_port()),
+    ]
+    out = subprocess.run(
+        [*torchrun, "-m", "stable_worldmodel.cli", *args, "--name", "two"],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=240,
+    )
     assert out.returncode == 0, out.stdout[-3000:] + out.stderr[-3000:]
     root = Path(_stablewm_home) / "checkpoints"
     w1, w2 = torch.load(root / "one" / "weights.pt"), torch.load(root / "two" / "weights.pt")

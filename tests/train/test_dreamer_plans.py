@@ -10,8 +10,18 @@ from stable_worldmodel import keys
 from stable_worldmodel.planning.learned import PlanSettings, resolve_subgoals
 from stable_worldmodel.train import train
 
-NET = dict(image_size=16, cnn_width=8, embed_dim=8, deter_dim=16, stoch_dim=4, hidden=16, history_size=2, frameskip=1,
-           warmup_steps=0, batch_size=4)
+NET = dict(
+    image_size=16,
+    cnn_width=8,
+    embed_dim=8,
+    deter_dim=16,
+    stoch_dim=4,
+    hidden=16,
+    history_size=2,
+    frameskip=1,
+    warmup_steps=0,
+    batch_size=4,
+)
 
 
 def test_dreamer_waypoints_are_frame_embeddings(toy, _stablewm_home, graph_plan):
@@ -27,5 +37,5 @@ def test_dreamer_waypoints_are_frame_embeddings(toy, _stablewm_home, graph_plan)
     nodes = policy.info_hook.graph.embeddings
     with torch.no_grad():
         goal = model.encode_goal(info[keys.GOAL][:, -1])  # (B, E)
-    for w, g in zip(waypoint[:, 0], goal):  # a node of the graph, or the goal itself once within the lookahead
+    for w, g in zip(waypoint[:, 0], goal, strict=False):  # a node of the graph, or the goal itself once within the lookahead
         assert torch.isclose(nodes, w, atol=1e-5).all(1).any() or torch.allclose(w, g, atol=1e-5)

@@ -15,8 +15,21 @@ from stable_worldmodel.train.data import TrainData
 from stable_worldmodel.train.features import cache_file, feature_fingerprint, load_or_compute_features
 
 #: a tiny PreJEPA (frozen random CNN of 2x2 patches of 8 features, one predictor layer) at 16x16
-NET = dict(backbone="cnn", image_size=16, embed_dim=8, cnn_width=8, cnn_grid=2, depth=1, heads=2, dim_head=4, mlp_dim=16,
-           history_size=2, frameskip=1, warmup_steps=0, batch_size=4)
+NET = dict(
+    backbone="cnn",
+    image_size=16,
+    embed_dim=8,
+    cnn_width=8,
+    cnn_grid=2,
+    depth=1,
+    heads=2,
+    dim_head=4,
+    mlp_dim=16,
+    history_size=2,
+    frameskip=1,
+    warmup_steps=0,
+    batch_size=4,
+)
 
 
 def _model_and_data(toy, seed=0, **overrides):
@@ -53,7 +66,9 @@ def test_cached_batches_equal_encoding_on_the_fly(toy):
     cfg, data, model = _model_and_data(toy)
     index = np.arange(min(6, data.num_train))
     live = data.batch(index)
-    cache = load_or_compute_features(data.dataset, model.encode_pixels, model.frozen_encoder(), cfg, torch.device("cpu"))
+    cache = load_or_compute_features(
+        data.dataset, model.encode_pixels, model.frozen_encoder(), cfg, torch.device("cpu")
+    )
     data.use_features(cache.features)
     cached = data.batch(index)
     assert keys.PIXELS not in cached
@@ -90,13 +105,19 @@ def test_a_failure_while_filling_leaves_no_cache_file(toy):
         load_or_compute_features(data.dataset, failing, model.frozen_encoder(), cfg, torch.device("cpu"), chunk_rows=8)
     folder = cache_file(data.dataset.path, "x").parent
     assert not any(folder.iterdir())  # neither the cache nor a .partial
-    cache = load_or_compute_features(data.dataset, model.encode_pixels, model.frozen_encoder(), cfg, torch.device("cpu"), chunk_rows=8)
+    cache = load_or_compute_features(
+        data.dataset, model.encode_pixels, model.frozen_encoder(), cfg, torch.device("cpu"), chunk_rows=8
+    )
     assert cache.computed and len(cache.features) == data.dataset.num_rows
 
 
 def test_a_damaged_cache_is_computed_again(toy):
     cfg, data, model = _model_and_data(toy)
-    first = load_or_compute_features(data.dataset, model.encode_pixels, model.frozen_encoder(), cfg, torch.device("cpu"))
+    first = load_or_compute_features(
+        data.dataset, model.encode_pixels, model.frozen_encoder(), cfg, torch.device("cpu")
+    )
     first.path.write_bytes(b"not a numpy file")
-    again = load_or_compute_features(data.dataset, model.encode_pixels, model.frozen_encoder(), cfg, torch.device("cpu"))
+    again = load_or_compute_features(
+        data.dataset, model.encode_pixels, model.frozen_encoder(), cfg, torch.device("cpu")
+    )
     assert again.computed and len(again.features) == data.dataset.num_rows

@@ -32,8 +32,19 @@ def test_trains_on_the_frozen_latents_of_its_source(fit, toy):
 
     fit("lewm", "lw", steps=4)
     source, _ = load_checkpoint("lw")
-    result = train("frame", None, steps=60, batch_size=8, device="cpu", seed=0, progress=False, source="lw", width=8,
-                   lr=3e-3, warmup_steps=0)
+    result = train(
+        "frame",
+        None,
+        steps=60,
+        batch_size=8,
+        device="cpu",
+        seed=0,
+        progress=False,
+        source="lw",
+        width=8,
+        lr=3e-3,
+        warmup_steps=0,
+    )
     assert result.run == "lw-frame"
     losses = [r["train/loss"] for r in result.history if "train/loss" in r]
     assert np.mean(losses[-3:]) < 0.7 * np.mean(losses[:3])  # the decoder learns
@@ -48,8 +59,22 @@ def test_needs_a_source_with_one_latent_per_frame(fit):
 
     with pytest.raises(ConfigError, match="requires source"):
         train("frame", "toy", steps=1, progress=False)
-    fit("prejepa", "pj", steps=1, image_size=16, embed_dim=8, cnn_width=8, cnn_grid=2, depth=1, heads=2, dim_head=4,
-        mlp_dim=16, history_size=2, frameskip=1, warmup_steps=0)
+    fit(
+        "prejepa",
+        "pj",
+        steps=1,
+        image_size=16,
+        embed_dim=8,
+        cnn_width=8,
+        cnn_grid=2,
+        depth=1,
+        heads=2,
+        dim_head=4,
+        mlp_dim=16,
+        history_size=2,
+        frameskip=1,
+        warmup_steps=0,
+    )
     with pytest.raises(ConfigError, match="one latent vector per frame"):
         train("frame", None, steps=1, device="cpu", progress=False, source="pj", width=4)
 
@@ -59,9 +84,27 @@ def test_eval_video_shows_the_predicted_frames(swm, fit, tmp_path):
 
     fit("lewm", "lw", steps=2)
     assert swm("train", "frame", "--from", "lw", "--steps", "2", "--device", "cpu").exit_code == 0
-    args = ["eval", "swm/Toy-v0", "--policy", "wm:lw", "-n", "1", "--samples", "4", "--iterations", "1", "--horizon", "2",
-            "--image-size", "16", "--max-steps", "4"]
-    plain = swm(*args, "--video", str(tmp_path / "plain"), "--json", str(tmp_path / "plain.json"), "--decoder", "lw-frame")
+    args = [
+        "eval",
+        "swm/Toy-v0",
+        "--policy",
+        "wm:lw",
+        "-n",
+        "1",
+        "--samples",
+        "4",
+        "--iterations",
+        "1",
+        "--horizon",
+        "2",
+        "--image-size",
+        "16",
+        "--max-steps",
+        "4",
+    ]
+    plain = swm(
+        *args, "--video", str(tmp_path / "plain"), "--json", str(tmp_path / "plain.json"), "--decoder", "lw-frame"
+    )
     assert plain.exit_code == 0, plain.output
     assert json.loads((tmp_path / "plain.json").read_text())["decoder"] == "lw-frame"
     with av.open(str(tmp_path / "plain" / "env_0.mp4")) as video:
@@ -75,8 +118,26 @@ def test_dreamer_videos_show_its_own_decoded_predictions(swm, fit, tmp_path):
     import av
 
     fit("dreamer", "dr", steps=2)
-    args = ["eval", "swm/Toy-v0", "--policy", "wm:dr", "-n", "1", "--samples", "4", "--iterations", "1", "--horizon", "2",
-            "--image-size", "16", "--max-steps", "4", "--subgoals", "none"]
+    args = [
+        "eval",
+        "swm/Toy-v0",
+        "--policy",
+        "wm:dr",
+        "-n",
+        "1",
+        "--samples",
+        "4",
+        "--iterations",
+        "1",
+        "--horizon",
+        "2",
+        "--image-size",
+        "16",
+        "--max-steps",
+        "4",
+        "--subgoals",
+        "none",
+    ]
     out = swm(*args, "--video", str(tmp_path / "v"), "--json", str(tmp_path / "v.json"))
     assert out.exit_code == 0, out.output
     assert json.loads((tmp_path / "v.json").read_text())["decoder"] == "dr"  # no dr-frame run: its own decoder

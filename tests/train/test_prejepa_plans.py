@@ -9,8 +9,20 @@ from stable_worldmodel import keys
 from stable_worldmodel.planning.learned import PlanSettings, world_model_policy
 from stable_worldmodel.train import train
 
-NET = dict(image_size=16, embed_dim=8, cnn_width=8, cnn_grid=2, depth=1, heads=2, dim_head=4, mlp_dim=16,
-           history_size=2, frameskip=1, warmup_steps=0, batch_size=4)
+NET = dict(
+    image_size=16,
+    embed_dim=8,
+    cnn_width=8,
+    cnn_grid=2,
+    depth=1,
+    heads=2,
+    dim_head=4,
+    mlp_dim=16,
+    history_size=2,
+    frameskip=1,
+    warmup_steps=0,
+    batch_size=4,
+)
 
 
 def test_a_proprio_model_plans_with_the_normalizer_it_was_trained_with(toy, _stablewm_home):
@@ -19,7 +31,9 @@ def test_a_proprio_model_plans_with_the_normalizer_it_was_trained_with(toy, _sta
     assert set(protocol["normalizers"]) == {keys.ACTION, keys.PROPRIO}
     assert keys.PROPRIO in policy.process  # proprio and goal_proprio are normalized as in training
     proprio = np.float32([[[0.3, 0.7]]])
-    expected = (proprio.reshape(-1, 2) - protocol["normalizers"][keys.PROPRIO]["mean"]) / protocol["normalizers"][keys.PROPRIO]["std"]
+    expected = (proprio.reshape(-1, 2) - protocol["normalizers"][keys.PROPRIO]["mean"]) / protocol["normalizers"][
+        keys.PROPRIO
+    ]["std"]
     assert np.allclose(policy.process[keys.PROPRIO].transform(proprio.reshape(-1, 2)), expected, atol=1e-5)
     with swm.World("swm/Toy-v0", 2, (16, 16), max_episode_steps=3, verbose=0) as world:
         world.set_policy(policy)
@@ -45,7 +59,7 @@ def test_subgoal_graph_on_patch_features_and_not_with_proprio(toy, _stablewm_hom
     assert feats.shape[:2] == (2, 1) and waypoint.shape == (2, 1, *feats.shape[2:])
     nodes = policy.info_hook.graph.embeddings
     goal = policy.solver.model.encode_pixels(seen[0][keys.GOAL][:, -1])  # (B, P, Dv)
-    for w, g in zip(waypoint[:, 0], goal):  # a node of the graph, or the goal itself once within the lookahead
+    for w, g in zip(waypoint[:, 0], goal, strict=False):  # a node of the graph, or the goal itself once within the lookahead
         assert torch.isclose(nodes, w.flatten(), atol=1e-5).all(1).any() or torch.allclose(w, g, atol=1e-5)
     train("prejepa", toy, steps=2, progress=False, name="pjp", val_every=0, proprio_dim=2, **NET)
     with pytest.raises(ConfigError, match="PreJEPA without proprio.*'pjp'"):

@@ -33,7 +33,13 @@ def _as_old_pickled_state(path) -> None:
     state = torch.load(path, weights_only=True)
     rng = state["rng"]
     n = rng["numpy"]
-    rng["numpy"] = (n["name"], np.asarray(n["keys"].numpy(), dtype=np.uint32), n["pos"], n["has_gauss"], n["cached_gaussian"])
+    rng["numpy"] = (
+        n["name"],
+        np.asarray(n["keys"].numpy(), dtype=np.uint32),
+        n["pos"],
+        n["has_gauss"],
+        n["cached_gaussian"],
+    )
     p = rng["python"]
     rng["python"] = (p["version"], tuple(p["state"].tolist()), p["gauss_next"])
     del state["format"]
@@ -108,7 +114,9 @@ def holder(_stablewm_home):
 
 def test_a_second_trainer_on_a_run_gets_run_busy_naming_the_holder(fit, holder):
     start = time.monotonic()
-    with pytest.raises(RunBusyError, match=rf"Run 'busy' requires a single trainer, got one already training it: pid {holder.pid} on "):
+    with pytest.raises(
+        RunBusyError, match=rf"Run 'busy' requires a single trainer, got one already training it: pid {holder.pid} on "
+    ):
         fit("dummy", "busy", steps=2)
     assert time.monotonic() - start < 1.0
     holder.send_signal(signal.SIGKILL)  # the lock dies with its holder
@@ -117,8 +125,22 @@ def test_a_second_trainer_on_a_run_gets_run_busy_naming_the_holder(fit, holder):
 
 
 def test_swm_train_on_a_busy_run_is_one_error_line_and_a_non_zero_exit(swm, toy, holder, error_line):
-    result = swm("train", "dummy", "--dataset", toy, "--name", "busy", "--steps", "2", "--device", "cpu",
-                 "--set", "image_size=16", "--set", "frameskip=1")
+    result = swm(
+        "train",
+        "dummy",
+        "--dataset",
+        toy,
+        "--name",
+        "busy",
+        "--steps",
+        "2",
+        "--device",
+        "cpu",
+        "--set",
+        "image_size=16",
+        "--set",
+        "frameskip=1",
+    )
     assert result.exit_code != 0
     line = error_line(result)
     assert "requires a single trainer" in line and f"pid {holder.pid}" in line
@@ -149,7 +171,9 @@ def test_a_run_killed_before_its_first_checkpoint_is_reused_by_a_plain_rerun(fit
     _killed_before_first_checkpoint(folder)
     result = fit("dummy", "early", steps=2, log_every=1)
     assert result.steps == 2 and (folder / "weights.pt").is_file()
-    assert [json.loads(x)["step"] for x in (folder / "metrics.jsonl").read_text().splitlines() if "train/loss" in x] == [1, 2]
+    assert [
+        json.loads(x)["step"] for x in (folder / "metrics.jsonl").read_text().splitlines() if "train/loss" in x
+    ] == [1, 2]
 
 
 def test_resume_of_a_run_killed_before_its_first_checkpoint_starts_from_step_0(fit, _stablewm_home, caplog):

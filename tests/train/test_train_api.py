@@ -40,7 +40,10 @@ def assert_same_weights(a: dict[str, torch.Tensor], b: dict[str, torch.Tensor]) 
 def outputs(model: torch.nn.Module) -> torch.Tensor:
     """Costs of fixed candidates from fixed images: they go through every module of the model."""
     gen = torch.Generator().manual_seed(7)
-    info = {keys.PIXELS: torch.randn(2, 3, 1, 3, 16, 16, generator=gen), keys.GOAL: torch.randn(2, 3, 1, 3, 16, 16, generator=gen)}
+    info = {
+        keys.PIXELS: torch.randn(2, 3, 1, 3, 16, 16, generator=gen),
+        keys.GOAL: torch.randn(2, 3, 1, 3, 16, 16, generator=gen),
+    }
     model.eval()
     with torch.no_grad():
         return model.get_cost(info, torch.randn(2, 3, 2, 2, generator=gen))
@@ -134,7 +137,15 @@ def test_run_folder_holds_model_protocol_metrics_plot_and_checkpoints(fit, captu
     result = fit("lewm", "layout", steps=8, log_every=2, val_every=4, ckpt_every=4)
     folder = _stablewm_home / "checkpoints" / "layout"
     assert result.folder == folder and result.run == "layout"
-    for name in ("weights.pt", "config.json", "protocol.json", "train_state.ckpt", "metrics.jsonl", "metrics.csv", "loss.png"):
+    for name in (
+        "weights.pt",
+        "config.json",
+        "protocol.json",
+        "train_state.ckpt",
+        "metrics.jsonl",
+        "metrics.csv",
+        "loss.png",
+    ):
         assert (folder / name).is_file(), name
     assert (folder / "loss.png").read_bytes().startswith(b"\x89PNG")
     assert list(folder.glob("*.pt")) == [folder / "weights.pt"]  # load_pretrained needs exactly one
@@ -251,6 +262,7 @@ def test_pldm_validation_loss_is_finite_when_one_sample_is_left_over(fit, toy, t
 
 # -- errors ------------------------------------------------------------------------------------
 
+
 @pytest.fixture
 def refused(fit, _stablewm_home):
     """``refused(exc, match, model, **kwargs)``: ``fit(model, "r", **kwargs)`` raises ``exc`` with a
@@ -266,11 +278,19 @@ def refused(fit, _stablewm_home):
 
 
 def test_unknown_model_suggests_the_close_one(refused):
-    refused(UnknownNameError, r"'lewn'\. Did you mean 'lewm'\? Accepted: dinowm, dreamer, dummy, frame, gcbc, gciql, gcivl, lewm, pldm, prejepa, tdmpc2", model="lewn")
+    refused(
+        UnknownNameError,
+        r"'lewn'\. Did you mean 'lewm'\? Accepted: dinowm, dreamer, dummy, frame, gcbc, gciql, gcivl, lewm, pldm, prejepa, tdmpc2",
+        model="lewn",
+    )
 
 
 def test_unknown_dataset_lists_the_cached_ones(refused, toy):
-    refused(FileNotFoundError, rf"'tyo' \(.*tyo\.h5 does not exist\)\. Did you mean '{toy}'\? Datasets in .*: {toy}$", dataset="tyo")
+    refused(
+        FileNotFoundError,
+        rf"'tyo' \(.*tyo\.h5 does not exist\)\. Did you mean '{toy}'\? Datasets in .*: {toy}$",
+        dataset="tyo",
+    )
 
 
 @pytest.mark.parametrize("missing", ["pixels", "action"])
@@ -282,7 +302,11 @@ def test_dataset_without_a_needed_column(refused, write_dataset, missing):
 
 def test_episodes_shorter_than_a_window(refused, write_dataset):
     name = write_dataset("short", lengths=(2, 2, 2))  # lewm's windows are history 2 + 1 prediction = 3 rows
-    refused(ConfigError, r"num_steps \* frameskip <= the longest episode \(2 rows\), got num_steps=3 \* frameskip=1 = 3", dataset=name)
+    refused(
+        ConfigError,
+        r"num_steps \* frameskip <= the longest episode \(2 rows\), got num_steps=3 \* frameskip=1 = 3",
+        dataset=name,
+    )
 
 
 def test_images_with_other_channels_than_the_model(refused):
@@ -325,7 +349,11 @@ def test_an_existing_run_needs_resume(fit, refused):
 
 
 def test_resume_needs_a_previous_run(refused):
-    refused(FileNotFoundError, r"requires a previous run with .*/checkpoints/r/train_state\.ckpt, which does not exist", resume=True)
+    refused(
+        FileNotFoundError,
+        r"requires a previous run with .*/checkpoints/r/train_state\.ckpt, which does not exist",
+        resume=True,
+    )
 
 
 def test_resume_needs_the_same_number_of_steps(fit):
@@ -347,5 +375,7 @@ def test_a_diverging_run_stops_at_its_next_log(fit, monkeypatch):
         return out
 
     monkeypatch.setattr(DummyWorldModel, "loss", nan_after_three)
-    with pytest.raises(FloatingPointError, match=r"Training diverged: loss \[.*nan.*\] in the 5 steps up to step 5; lower --lr"):
+    with pytest.raises(
+        FloatingPointError, match=r"Training diverged: loss \[.*nan.*\] in the 5 steps up to step 5; lower --lr"
+    ):
         fit("dummy", "nan", steps=20, log_every=5)

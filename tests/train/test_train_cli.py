@@ -26,7 +26,8 @@ def test_train_prints_the_checkpoint_and_the_rate(swm, toy, _stablewm_home):
     assert result.stderr == ""  # no progress bar when stderr is not a terminal
     summary, where = result.stdout.strip().splitlines()
     match = re.fullmatch(
-        r"Trained dummy \(tiny\) on toy: 5 steps in \d+ s \((\d+) samples/s\), train loss (\d+\.\d{4}), val loss (\d+\.\d{4})", summary
+        r"Trained dummy \(tiny\) on toy: 5 steps in \d+ s \((\d+) samples/s\), train loss (\d+\.\d{4}), val loss (\d+\.\d{4})",
+        summary,
     )
     assert match, summary
     assert int(match[1]) > 0
@@ -60,8 +61,21 @@ def test_epochs_bound_the_run(swm, toy):
 
 
 def test_set_overrides_config_fields(swm, toy, _stablewm_home):
-    result = swm("train", "dummy", "--dataset", toy, "--steps", "2", "--name", "r", *QUICK, "--set", "warmup_steps=12",
-                 "--set", "image_mean=[0.4, 0.4, 0.4]")
+    result = swm(
+        "train",
+        "dummy",
+        "--dataset",
+        toy,
+        "--steps",
+        "2",
+        "--name",
+        "r",
+        *QUICK,
+        "--set",
+        "warmup_steps=12",
+        "--set",
+        "image_mean=[0.4, 0.4, 0.4]",
+    )
     assert result.exit_code == 0, result.output
     config = json.loads((_stablewm_home / "checkpoints" / "r" / "protocol.json").read_text())["config"]
     assert config["warmup_steps"] == 12 and list(config["image_mean"]) == [0.4, 0.4, 0.4]
@@ -70,7 +84,10 @@ def test_set_overrides_config_fields(swm, toy, _stablewm_home):
 def test_unknown_model_is_one_line_naming_the_close_one(swm, toy, error_line, _stablewm_home):
     result = swm("train", "lewn", "--dataset", toy)
     assert result.exit_code == 1
-    assert error_line(result) == "Error: Unknown world model 'lewn'. Did you mean 'lewm'? Accepted: dinowm, dreamer, dummy, frame, gcbc, gciql, gcivl, lewm, pldm, prejepa, tdmpc2"
+    assert (
+        error_line(result)
+        == "Error: Unknown world model 'lewn'. Did you mean 'lewm'? Accepted: dinowm, dreamer, dummy, frame, gcbc, gciql, gcivl, lewm, pldm, prejepa, tdmpc2"
+    )
     assert no_runs(_stablewm_home)
 
 
@@ -93,7 +110,11 @@ def test_unknown_dataset_is_one_line_naming_the_cached_ones(swm, toy, error_line
         (("--epochs", "0"), 2, "'--epochs': requires a number > 0, got '0'"),
         (("--lr", "-1"), 2, "'--lr': requires a number > 0, got '-1'"),
         (("--frameskip", "x"), 2, "'--frameskip'"),
-        (("--set", "lr"), 2, "A config override requires KEY=VALUE (a config field of the model, e.g. proprio_dim=2), got 'lr'"),
+        (
+            ("--set", "lr"),
+            2,
+            "A config override requires KEY=VALUE (a config field of the model, e.g. proprio_dim=2), got 'lr'",
+        ),
         (("--set", "warmup_stepz=8"), 1, "DummyConfig has no field 'warmup_stepz'. Did you mean 'warmup_steps'"),
     ],
     ids=lambda v: " ".join(v) if isinstance(v, tuple) else None,

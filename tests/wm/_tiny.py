@@ -9,12 +9,21 @@ from stable_worldmodel import keys
 IMAGE = 16
 #: a width-8 CNN world model at 16x16 (``make(name, "tiny", action_dim=2, **TINY)``)
 TINY = dict(
-    image_size=IMAGE, embed_dim=8, cnn_width=8, depth=1, heads=2, dim_head=4, mlp_dim=16, projector_hidden=16,
-    history_size=2, frameskip=1,
+    image_size=IMAGE,
+    embed_dim=8,
+    cnn_width=8,
+    depth=1,
+    heads=2,
+    dim_head=4,
+    mlp_dim=16,
+    projector_hidden=16,
+    history_size=2,
+    frameskip=1,
 )
 #: the ViT variant of ``TINY`` (one layer of width 8, patch 8: 4 patches + CLS)
 VIT = dict(
-    encoder="vit", patch_size=8,
+    encoder="vit",
+    patch_size=8,
     vit_overrides={"hidden_size": 8, "num_hidden_layers": 1, "num_attention_heads": 2, "intermediate_size": 16},
 )
 ACTION_DIM = 2
@@ -70,7 +79,9 @@ def make_tiny(name: str, seed: int = 0, **overrides):
     return wm.make(name, "tiny", action_dim=ACTION_DIM, **{**TINY, **overrides})
 
 
-def fit_losses(model: torch.nn.Module, batch: dict, steps: int = 30, lr: float = 3e-3, optimizer=torch.optim.Adam) -> list[float]:
+def fit_losses(
+    model: torch.nn.Module, batch: dict, steps: int = 30, lr: float = 3e-3, optimizer=torch.optim.Adam
+) -> list[float]:
     """Take ``steps`` optimizer steps on ``model.loss(batch)["loss"]`` (trainable parameters only); the losses before each step."""
     opt = optimizer([p for p in model.parameters() if p.requires_grad], lr=lr)
     losses = []
@@ -87,4 +98,6 @@ def assert_close(actual: torch.Tensor, expected: torch.Tensor, rtol: float = 1e-
     """``torch.allclose`` with shapes checked (``torch.testing.assert_close`` costs ~1.5 s on first call)."""
     expected = torch.as_tensor(expected, dtype=actual.dtype)
     assert actual.shape == expected.shape, f"shape {tuple(actual.shape)} != {tuple(expected.shape)}"
-    assert torch.allclose(actual, expected, rtol=rtol, atol=atol), f"max abs diff {(actual - expected).abs().max().item():.3g}"
+    assert torch.allclose(actual, expected, rtol=rtol, atol=atol), (
+        f"max abs diff {(actual - expected).abs().max().item():.3g}"
+    )

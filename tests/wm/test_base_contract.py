@@ -99,7 +99,9 @@ def test_a_new_model_declares_a_capability_once_and_planning_sees_it(monkeypatch
 
     monkeypatch.setitem(_registry._ENTRIES, "mine", MyConfig)
     protocol = {"model": "mine", "config": {}, "dataset": None}
-    assert learned._graph_unavailable(protocol, None) == "its protocol names no training dataset"  # past the model check
+    assert (
+        learned._graph_unavailable(protocol, None) == "its protocol names no training dataset"
+    )  # past the model check
     monkeypatch.setattr(MyConfig, "subgoal_graph", False)
     assert "does not support a subgoal graph" in learned._graph_unavailable(protocol, None)
 

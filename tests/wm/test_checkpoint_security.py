@@ -127,18 +127,31 @@ def test_trusted_prefix_from_the_caller_or_the_environment(tmp_path, monkeypatch
 
 
 def test_every_builtin_kind_of_target_still_builds():
-    built = instantiate({
-        "norm": {"_target_": "torch.nn.BatchNorm1d", "_partial_": True},
-        "act": {"_target_": "torch.nn.functional.gelu", "_partial_": True},
-        "vit": {"_target_": "stable_pretraining.backbone.utils.vit_hf", "size": "tiny", "image_size": 16, "patch_size": 8,
-                "num_hidden_layers": 1, "hidden_size": 8, "num_attention_heads": 2},
-        "cfg": {"_target_": "transformers.ViTConfig", "hidden_size": 8},
-        "cnn": {"_target_": "stable_worldmodel.wm.backbones.create_backbone", "name": "cnn_aa", "pretrained": False},
-    })
+    built = instantiate(
+        {
+            "norm": {"_target_": "torch.nn.BatchNorm1d", "_partial_": True},
+            "act": {"_target_": "torch.nn.functional.gelu", "_partial_": True},
+            "vit": {
+                "_target_": "stable_pretraining.backbone.utils.vit_hf",
+                "size": "tiny",
+                "image_size": 16,
+                "patch_size": 8,
+                "num_hidden_layers": 1,
+                "hidden_size": 8,
+                "num_attention_heads": 2,
+            },
+            "cfg": {"_target_": "transformers.ViTConfig", "hidden_size": 8},
+            "cnn": {
+                "_target_": "stable_worldmodel.wm.backbones.create_backbone",
+                "name": "cnn_aa",
+                "pretrained": False,
+            },
+        }
+    )
     assert built["norm"](4).num_features == 4
     assert built["vit"].config.hidden_size == 8 and built["cfg"].hidden_size == 8
     for name in ("lewm", "pldm", "prejepa", "gcbc", "gciql", "tdmpc2", "dreamer", "dummy"):  # every tree we write
-        tree = (tiny_tree(name) if name in ("lewm", "pldm") else wm.get_config(name, "tiny").target_tree(ACTION_DIM))
+        tree = tiny_tree(name) if name in ("lewm", "pldm") else wm.get_config(name, "tiny").target_tree(ACTION_DIM)
         assert isinstance(instantiate(json.loads(json.dumps(tree))), torch.nn.Module), name
 
 
@@ -148,7 +161,13 @@ def test_our_functions_that_are_not_factories_are_refused(marker):
     with pytest.raises(UntrustedCheckpointError, match="trust_remote_code|not a module class"):
         instantiate({"_target_": "transformers.AutoConfig.from_pretrained", "_args_": ["x"], "trust_remote_code": True})
     with pytest.raises(ConfigError, match="trust_remote_code"):
-        instantiate({"_target_": "stable_worldmodel.wm.backbones.create_backbone", "name": "vit_tiny", "trust_remote_code": True})
+        instantiate(
+            {
+                "_target_": "stable_worldmodel.wm.backbones.create_backbone",
+                "name": "vit_tiny",
+                "trust_remote_code": True,
+            }
+        )
 
 
 def test_bad_partial_and_args_are_config_errors():
@@ -217,7 +236,9 @@ def test_pickled_objects_in_weights_pt_are_refused(_stablewm_home, marker):
     folder = _stablewm_home / "checkpoints" / "pickled"
     folder.mkdir(parents=True)
     torch.save({"w": torch.zeros(2), "obj": ConfigError("x")}, folder / "weights.pt")
-    (folder / "config.json").write_text(json.dumps({"_target_": "torch.nn.Linear", "in_features": 1, "out_features": 2}))
+    (folder / "config.json").write_text(
+        json.dumps({"_target_": "torch.nn.Linear", "in_features": 1, "out_features": 2})
+    )
     with pytest.raises(CheckpointError, match="pickled Python objects"):
         load_pretrained("pickled")
 

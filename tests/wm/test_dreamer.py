@@ -16,7 +16,9 @@ from stable_worldmodel.errors import ConfigError, SpaceError, UnknownNameError
 
 A = ACTION_DIM
 #: a width-8 ConvEncoder at 16x16, deter 16, stoch 4, 3 frames per sample
-NET = dict(image_size=IMAGE, cnn_width=8, embed_dim=8, deter_dim=16, stoch_dim=4, hidden=16, history_size=2, frameskip=1)
+NET = dict(
+    image_size=IMAGE, cnn_width=8, embed_dim=8, deter_dim=16, stoch_dim=4, hidden=16, history_size=2, frameskip=1
+)
 F = 20
 
 
@@ -39,8 +41,11 @@ def plan_info(b: int, s: int, t: int = 2, goal: bool = True) -> dict:
 
 
 def batch(b: int = 4, t: int = 3, seed: int = 0) -> dict:
-    return {keys.PIXELS: images(b, t, seed=seed), keys.ACTION: randn(b, t, A, seed=seed + 1).clamp(-1, 1),
-            keys.REWARD: randn(b, t, seed=seed + 2)}
+    return {
+        keys.PIXELS: images(b, t, seed=seed),
+        keys.ACTION: randn(b, t, A, seed=seed + 1).clamp(-1, 1),
+        keys.REWARD: randn(b, t, seed=seed + 2),
+    }
 
 
 def test_shapes_of_every_verb(model):
@@ -147,8 +152,18 @@ def test_fit_to_frames_keeps_the_mean_frame_which_decode_adds(model):
 def test_training_fits_the_mean_frame(toy):
     from stable_worldmodel.train import train
 
-    train("dreamer", "toy", steps=1, batch_size=4, device="cpu", progress=False, name="dr-mean", val_every=0,
-          warmup_steps=0, **NET)
+    train(
+        "dreamer",
+        "toy",
+        steps=1,
+        batch_size=4,
+        device="cpu",
+        progress=False,
+        name="dr-mean",
+        val_every=0,
+        warmup_steps=0,
+        **NET,
+    )
     import h5py
 
     loaded = wm.load_pretrained("dr-mean")
@@ -181,14 +196,27 @@ def test_save_load_round_trip(model):
     cand = randn(2, 3, 3, A)
     with torch.no_grad():
         assert torch.equal(loaded.get_cost(plan_info(2, 3), cand), model.get_cost(plan_info(2, 3), cand))
-    assert all(torch.equal(a, b) for a, b in zip(loaded.state_dict().values(), model.state_dict().values(), strict=True))
+    assert all(
+        torch.equal(a, b) for a, b in zip(loaded.state_dict().values(), model.state_dict().values(), strict=True)
+    )
 
 
 def test_trains_on_the_toy_dataset(toy):
     from stable_worldmodel.train import train
 
-    result = train("dreamer", "toy", steps=2, batch_size=4, device="cpu", progress=False, name="dr", val_every=0,
-                   warmup_steps=0, reward_head=True, **NET)
+    result = train(
+        "dreamer",
+        "toy",
+        steps=2,
+        batch_size=4,
+        device="cpu",
+        progress=False,
+        name="dr",
+        val_every=0,
+        warmup_steps=0,
+        reward_head=True,
+        **NET,
+    )
     assert np.isfinite(result.train_loss)
     loaded = wm.load_pretrained("dr").eval()
     with torch.no_grad():
@@ -225,6 +253,8 @@ def test_config_needs_no_torch():
     import subprocess
     import sys
 
-    code = ("import sys; from stable_worldmodel.wm import get_config; c = get_config('dreamer', 'tiny'); "
-            "c.target_tree(2); assert 'torch' not in sys.modules, 'torch imported'")
+    code = (
+        "import sys; from stable_worldmodel.wm import get_config; c = get_config('dreamer', 'tiny'); "
+        "c.target_tree(2); assert 'torch' not in sys.modules, 'torch imported'"
+    )
     subprocess.run([sys.executable, "-c", code], check=True)

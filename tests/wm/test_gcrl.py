@@ -27,10 +27,23 @@ from stable_worldmodel.wm.utils import instantiate, load_pretrained, save_pretra
 
 ALGOS = ("gcbc", "gcivl", "gciql")
 #: a width-8 CNN policy at 16x16 (one token per frame), three layers: self, cross (goal), frame aggregation
-NET = dict(image_size=IMAGE, embed_dim=8, cnn_width=8, depth=3, heads=2, dim_head=4, mlp_dim=16, history_size=2, q_hidden=8, metric_dim=8)
+NET = dict(
+    image_size=IMAGE,
+    embed_dim=8,
+    cnn_width=8,
+    depth=3,
+    heads=2,
+    dim_head=4,
+    mlp_dim=16,
+    history_size=2,
+    q_hidden=8,
+    metric_dim=8,
+)
 #: the ViT variant (patch 8: 4 patches + CLS, width 8)
 VIT = dict(
-    NET, encoder="vit", patch_size=8,
+    NET,
+    encoder="vit",
+    patch_size=8,
     vit_overrides={"hidden_size": 8, "num_hidden_layers": 1, "num_attention_heads": 2, "intermediate_size": 16},
 )
 B = 3
@@ -48,7 +61,11 @@ def build(name: str, seed: int = 0, **overrides) -> torch.nn.Module:
 def batch(name: str, seed: int = 0, **overrides) -> dict:
     """A batch as TrainData gives it: ``num_steps`` frames, actions, one goal per sample (sample 0's goal is its frame 1)."""
     t = config(name, **overrides).num_steps
-    out = {keys.PIXELS: images(B, t, seed=seed), keys.ACTION: randn(B, t, ACTION_DIM, seed=seed + 1), "goal_pixels": images(B, 1, seed=seed + 2)}
+    out = {
+        keys.PIXELS: images(B, t, seed=seed),
+        keys.ACTION: randn(B, t, ACTION_DIM, seed=seed + 1),
+        "goal_pixels": images(B, 1, seed=seed + 2),
+    }
     out["goal_pixels"][0, 0] = out[keys.PIXELS][0, 1]
     return out
 
@@ -71,7 +88,11 @@ def test_every_method_has_the_documented_shapes(name):
     if name != "gcbc":
         assert model.predict_values(info["embed"], goal).shape == (B, 2, 1)
     out = model.train().loss(batch(name))
-    terms = {"gcbc": {"action_loss"}, "gcivl": {"value_loss", "actor_loss"}, "gciql": {"value_loss", "critic_loss", "actor_loss"}}[name]
+    terms = {
+        "gcbc": {"action_loss"},
+        "gcivl": {"value_loss", "actor_loss"},
+        "gciql": {"value_loss", "critic_loss", "actor_loss"},
+    }[name]
     assert terms <= set(out) and out["loss"].ndim == 0 and torch.isfinite(out["loss"])
     assert out["emb"].shape == (B, config(name).num_steps, 1, 8)
     out["loss"].backward()
@@ -81,7 +102,10 @@ def test_every_method_has_the_documented_shapes(name):
 def test_get_action_uses_the_last_history_frames_and_goal():
     model = build("gcbc").eval()
     base = act_info()
-    longer = {keys.PIXELS: torch.cat([images(B, 3, seed=9), base[keys.PIXELS]], 1), keys.GOAL: torch.cat([images(B, 1, seed=1), base[keys.GOAL]], 1)}
+    longer = {
+        keys.PIXELS: torch.cat([images(B, 3, seed=9), base[keys.PIXELS]], 1),
+        keys.GOAL: torch.cat([images(B, 1, seed=1), base[keys.GOAL]], 1),
+    }
     assert_close(model.get_action(longer), model.get_action(act_info()))
 
 
@@ -108,9 +132,18 @@ def test_heads_shapes_and_upstream_parameter_names():
     first, second = DoublePredictorWrapper(Predictor, out_dim=1, **kw)(x, g)
     assert first.shape == second.shape == (2, 3, 1) and not torch.equal(first, second)
     names = set(policy.state_dict())
-    assert {"pos_embedding", "pos_embedding_goal", "out_proj.weight", "transformer.norm.weight",
-            "transformer.layers.0.0.causal_mask", "transformer.layers.0.0.to_q.weight", "transformer.layers.0.0.to_kv.weight",
-            "transformer.layers.1.0.norm_c.weight", "transformer.layers.2.0.frame_tokens", "transformer.layers.2.1.net.4.bias"} <= names
+    assert {
+        "pos_embedding",
+        "pos_embedding_goal",
+        "out_proj.weight",
+        "transformer.norm.weight",
+        "transformer.layers.0.0.causal_mask",
+        "transformer.layers.0.0.to_q.weight",
+        "transformer.layers.0.0.to_kv.weight",
+        "transformer.layers.1.0.norm_c.weight",
+        "transformer.layers.2.0.frame_tokens",
+        "transformer.layers.2.1.net.4.bias",
+    } <= names
     assert policy.transformer.layers[0][0].causal_mask.shape == (1, 1, 12, 12)
     assert "q_head.4.weight" in QPredictor(action_dim=5, **kw).state_dict()
     assert "embed_proj.weight" in metric.state_dict()
@@ -142,7 +175,13 @@ def test_teacher_is_an_exponential_moving_average():
         student.weight.add_(1.0)
     wrapper.update_teacher()
     assert_close(wrapper.teacher.weight, 0.9 * before + 0.1 * student.weight.detach())
-    assert {"student.weight", "teacher.weight", "ema_coefficient", "base_ema_coefficient", "final_ema_coefficient"} <= set(wrapper.state_dict())
+    assert {
+        "student.weight",
+        "teacher.weight",
+        "ema_coefficient",
+        "base_ema_coefficient",
+        "final_ema_coefficient",
+    } <= set(wrapper.state_dict())
 
 
 def test_training_loss_moves_the_teacher_only_in_training_mode():
@@ -165,7 +204,10 @@ def test_actor_trains_the_encoder_only_when_asked(name):
         model = build(name, actor_encoder_grad=flag).train()
         model.loss(batch(name))["actor_loss"].backward()
         assert (model.encoder.head.weight.grad is not None) is flag
-        assert model.action_predictor.out_proj.weight.grad is not None and model.value_predictor.student.out_proj.weight.grad is None
+        assert (
+            model.action_predictor.out_proj.weight.grad is not None
+            and model.value_predictor.student.out_proj.weight.grad is None
+        )
 
 
 def test_extra_encoders_join_every_token():
@@ -180,20 +222,42 @@ def test_extra_encoders_join_every_token():
 def test_gcbc_of_release_003():
     tree = {
         "_target_": "stable_worldmodel.wm.gcbc.GCBC",
-        "encoder": {"_target_": "stable_worldmodel.wm.gcrl.module.ConvLogitsEncoder", "image_size": IMAGE, "width": 8, "hidden_size": 8},
-        "predictor": {"_target_": "stable_worldmodel.wm.gcbc.Predictor", "num_patches": 1, "num_frames": 2, "dim": 8, "depth": 3,
-                      "heads": 2, "mlp_dim": 16, "dim_head": 4, "action_dim": ACTION_DIM},
+        "encoder": {
+            "_target_": "stable_worldmodel.wm.gcrl.module.ConvLogitsEncoder",
+            "image_size": IMAGE,
+            "width": 8,
+            "hidden_size": 8,
+        },
+        "predictor": {
+            "_target_": "stable_worldmodel.wm.gcbc.Predictor",
+            "num_patches": 1,
+            "num_frames": 2,
+            "dim": 8,
+            "depth": 3,
+            "heads": 2,
+            "mlp_dim": 16,
+            "dim_head": 4,
+            "action_dim": ACTION_DIM,
+        },
         "history_size": 2,
     }
     torch.manual_seed(0)
     model = instantiate(tree)
     assert type(model) is wm.GCBC
-    assert {"backbone.head.weight", "predictor.action_proj.weight", "predictor.transformer.layers.2.0.out_token"} <= set(model.state_dict())
-    assert model.predict(model.encode(act_info())["embed"], model.encode({keys.PIXELS: images(B, 1)})["embed"]).shape == (B, 1, ACTION_DIM)
+    assert {
+        "backbone.head.weight",
+        "predictor.action_proj.weight",
+        "predictor.transformer.layers.2.0.out_token",
+    } <= set(model.state_dict())
+    assert model.predict(
+        model.encode(act_info())["embed"], model.encode({keys.PIXELS: images(B, 1)})["embed"]
+    ).shape == (B, 1, ACTION_DIM)
     assert model.get_action(act_info()).shape == (B, ACTION_DIM)
     out = model.train().loss(batch("gcbc"))
     out["loss"].backward()
-    assert model.backbone.head.weight.grad is None and model.predictor.action_proj.weight.grad is not None  # frozen backbone
+    assert (
+        model.backbone.head.weight.grad is None and model.predictor.action_proj.weight.grad is not None
+    )  # frozen backbone
 
 
 # -- checkpoints ---------------------------------------------------------------------------------
@@ -210,30 +274,63 @@ def test_checkpoint_round_trip_gives_identical_outputs(name, _stablewm_home):
     if name != "gcbc":
         assert torch.equal(loaded.loss(batch(name))["loss"], model.loss(batch(name))["loss"])
     state = model.state_dict()
-    assert loaded.state_dict().keys() == state.keys() and all(torch.equal(v, state[k]) for k, v in loaded.state_dict().items())
+    assert loaded.state_dict().keys() == state.keys() and all(
+        torch.equal(v, state[k]) for k, v in loaded.state_dict().items()
+    )
 
 
 def test_upstream_style_config_json_loads(_stablewm_home):
     """A config.json as upstream 0.1.1's gcivl script would build the model (HF ViT through
     stable_pretraining, the value head in stable_pretraining's TeacherStudentWrapper)."""
     pytest.importorskip("transformers")
-    head = {"num_patches": 4, "num_frames": 2, "dim": 8, "depth": 3, "heads": 2, "mlp_dim": 16, "dim_head": 4, "dropout": 0.0, "emb_dropout": 0.0}
+    head = {
+        "num_patches": 4,
+        "num_frames": 2,
+        "dim": 8,
+        "depth": 3,
+        "heads": 2,
+        "mlp_dim": 16,
+        "dim_head": 4,
+        "dropout": 0.0,
+        "emb_dropout": 0.0,
+    }
     tree = {
         "_target_": "stable_worldmodel.wm.gcrl.GCRL",
-        "encoder": {"_target_": "stable_pretraining.backbone.utils.vit_hf", "size": "tiny", "patch_size": 8, "image_size": IMAGE,
-                    "pretrained": False, "use_mask_token": False, **VIT["vit_overrides"]},
+        "encoder": {
+            "_target_": "stable_pretraining.backbone.utils.vit_hf",
+            "size": "tiny",
+            "patch_size": 8,
+            "image_size": IMAGE,
+            "pretrained": False,
+            "use_mask_token": False,
+            **VIT["vit_overrides"],
+        },
         "action_predictor": {"_target_": "stable_worldmodel.wm.gcrl.module.Predictor", "out_dim": ACTION_DIM, **head},
-        "value_predictor": {"_target_": "stable_pretraining.TeacherStudentWrapper", "warm_init": True, "base_ema_coefficient": 0.995,
-                            "final_ema_coefficient": 0.995,
-                            "student": {"_target_": "stable_worldmodel.wm.gcrl.module.Predictor", "out_dim": 1, "pool_type": "mean", **head}},
+        "value_predictor": {
+            "_target_": "stable_pretraining.TeacherStudentWrapper",
+            "warm_init": True,
+            "base_ema_coefficient": 0.995,
+            "final_ema_coefficient": 0.995,
+            "student": {
+                "_target_": "stable_worldmodel.wm.gcrl.module.Predictor",
+                "out_dim": 1,
+                "pool_type": "mean",
+                **head,
+            },
+        },
         "history_size": 2,
     }
     torch.manual_seed(0)
     model = instantiate(json.loads(json.dumps(tree)))
     assert model.algorithm == "gcivl"  # inferred: a value head and no critic
     names = set(model.state_dict())
-    assert {"log_stds", "action_predictor.transformer.layers.2.0.frame_tokens", "value_predictor.student.out_proj.weight",
-            "value_predictor.teacher.out_proj.weight", "value_predictor.ema_coefficient"} <= names
+    assert {
+        "log_stds",
+        "action_predictor.transformer.layers.2.0.frame_tokens",
+        "value_predictor.student.out_proj.weight",
+        "value_predictor.teacher.out_proj.weight",
+        "value_predictor.ema_coefficient",
+    } <= names
     assert any(n.startswith("encoder.") for n in names)
     folder = _stablewm_home / "checkpoints" / "upstream"
     folder.mkdir(parents=True)
@@ -249,13 +346,20 @@ def test_upstream_target_paths_resolve_to_ours():
     from stable_worldmodel.wm.utils import _locate
 
     assert _locate("stable_worldmodel.wm.gcrl.gcrl.GCRL") is _locate("stable_worldmodel.wm.gcrl.GCRL") is wm.GCRL
-    assert _locate("stable_worldmodel.wm.gcrl.module.QPredictor") is _locate("stable_worldmodel.wm.gcrl.QPredictor") is module.QPredictor
+    assert (
+        _locate("stable_worldmodel.wm.gcrl.module.QPredictor")
+        is _locate("stable_worldmodel.wm.gcrl.QPredictor")
+        is module.QPredictor
+    )
     assert _locate("stable_worldmodel.wm.gcbc.GCBC") is wm.GCBC
     assert _locate("stable_pretraining.backbone.utils.TeacherStudentWrapper") is module.TeacherStudentWrapper
 
 
 def test_upstream_alias_of_eval_only_encoder():
-    tree = {"_target_": "stable_pretraining.backbone.EvalOnly", "backbone": {"_target_": "torch.nn.Linear", "in_features": 2, "out_features": 1}}
+    tree = {
+        "_target_": "stable_pretraining.backbone.EvalOnly",
+        "backbone": {"_target_": "torch.nn.Linear", "in_features": 2, "out_features": 1},
+    }
     frozen = instantiate(tree)
     assert set(frozen.state_dict()) == {"backbone.weight", "backbone.bias"}
     assert not frozen.train().backbone.training and not frozen.backbone.weight.requires_grad
@@ -321,9 +425,17 @@ def test_bad_configs_are_typed_errors():
     with pytest.raises(ConfigError, match="Did you mean 'metric'"):
         wm.get_config("gcivl", value_head="metrics")
     with pytest.raises(UnknownNameError, match="GCRL algorithm 'gcql'"):
-        wm.GCRL(torch.nn.Identity(), Predictor(out_dim=2, num_patches=1, num_frames=1, dim=8, depth=3, heads=2, mlp_dim=8), algorithm="gcql")
+        wm.GCRL(
+            torch.nn.Identity(),
+            Predictor(out_dim=2, num_patches=1, num_frames=1, dim=8, depth=3, heads=2, mlp_dim=8),
+            algorithm="gcql",
+        )
     with pytest.raises(ConfigError, match="requires value_predictor"):
-        wm.GCRL(torch.nn.Identity(), Predictor(out_dim=2, num_patches=1, num_frames=1, dim=8, depth=3, heads=2, mlp_dim=8), algorithm="gcivl")
+        wm.GCRL(
+            torch.nn.Identity(),
+            Predictor(out_dim=2, num_patches=1, num_frames=1, dim=8, depth=3, heads=2, mlp_dim=8),
+            algorithm="gcivl",
+        )
 
 
 def test_missing_inputs_are_typed_errors():
@@ -340,7 +452,9 @@ def test_missing_inputs_are_typed_errors():
     with pytest.raises(UnknownNameError, match="info\\['goal'\\]"):
         model.get_action({keys.PIXELS: images(B, 1)})
     with pytest.raises(SpaceError, match="at most num_frames"):
-        model.predict_actions(model.encode({keys.PIXELS: images(B, 3)})["embed"], model.encode({keys.PIXELS: images(B, 1)})["embed"])
+        model.predict_actions(
+            model.encode({keys.PIXELS: images(B, 3)})["embed"], model.encode({keys.PIXELS: images(B, 1)})["embed"]
+        )
 
 
 # -- training on recorded data -------------------------------------------------------------------
@@ -365,9 +479,13 @@ def test_train_data_gives_goal_frames(toy_root):
     out = data.train_batch(torch.Generator().manual_seed(0), 4)
     assert out[keys.PIXELS].shape == (4, 3, 3, IMAGE, IMAGE) and out[keys.ACTION].shape == (4, 3, ACTION_DIM)
     assert out["goal_pixels"].shape == out["actor_goal_pixels"].shape == (4, 1, 3, IMAGE, IMAGE)
-    assert torch.equal(out["goal_pixels"][:, 0], out[keys.PIXELS][:, 1])  # "current": the last history frame, bit for bit
+    assert torch.equal(
+        out["goal_pixels"][:, 0], out[keys.PIXELS][:, 1]
+    )  # "current": the last history frame, bit for bit
     index = data.val_batches(4, 8)[0]
-    assert torch.equal(data.batch(index)["actor_goal_pixels"], data.batch(index)["actor_goal_pixels"])  # fixed validation goals
+    assert torch.equal(
+        data.batch(index)["actor_goal_pixels"], data.batch(index)["actor_goal_pixels"]
+    )  # fixed validation goals
 
 
 def test_train_data_needs_pixels(_stablewm_home):
@@ -392,8 +510,22 @@ def test_loss_falls_on_recorded_toy_data(name, toy_root):
     from stable_worldmodel.train import train
 
     extra = {} if name == "gcbc" else FAST_TD
-    result = train(name, "toy", "tiny", steps=120, name=f"toy-{name}", seed=0, device="cpu", progress=False, log_every=20,
-                   cache_dir=str(toy_root), batch_size=32, warmup_steps=0, **NET, **extra)
+    result = train(
+        name,
+        "toy",
+        "tiny",
+        steps=120,
+        name=f"toy-{name}",
+        seed=0,
+        device="cpu",
+        progress=False,
+        log_every=20,
+        cache_dir=str(toy_root),
+        batch_size=32,
+        warmup_steps=0,
+        **NET,
+        **extra,
+    )
     losses = [r["train/loss"] for r in result.history if "train/loss" in r]
     later = float(np.mean(losses[len(losses) // 2 :]))
     assert later < (0.8 if name == "gcbc" else 0.92) * losses[0], losses
@@ -408,8 +540,19 @@ def test_resume_equals_an_uninterrupted_run(toy_root, monkeypatch):
     from stable_worldmodel.train import train
     from stable_worldmodel.train.data import TrainData
 
-    args = dict(steps=8, seed=0, device="cpu", progress=False, log_every=2, ckpt_every=4, cache_dir=str(toy_root), batch_size=8,
-                warmup_steps=0, dropout=0.1, **NET)
+    args = dict(
+        steps=8,
+        seed=0,
+        device="cpu",
+        progress=False,
+        log_every=2,
+        ckpt_every=4,
+        cache_dir=str(toy_root),
+        batch_size=8,
+        warmup_steps=0,
+        dropout=0.1,
+        **NET,
+    )
     whole = train("gciql", "toy", "tiny", name="resume-whole", **args)
     draw, calls = TrainData.train_batch, []
 

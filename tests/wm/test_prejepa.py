@@ -18,11 +18,26 @@ from stable_worldmodel.errors import ConfigError, SpaceError, UnknownNameError
 
 A = ACTION_DIM
 #: a width-8 frozen patch CNN (2x2 = 4 patches of 8 features) and a one-layer predictor
-NET = dict(backbone="cnn", image_size=IMAGE, embed_dim=8, cnn_width=8, cnn_grid=2, depth=1, heads=2, dim_head=4, mlp_dim=16,
-           history_size=2, frameskip=1, action_emb_dim=4, proprio_emb_dim=4)
+NET = dict(
+    backbone="cnn",
+    image_size=IMAGE,
+    embed_dim=8,
+    cnn_width=8,
+    cnn_grid=2,
+    depth=1,
+    heads=2,
+    dim_head=4,
+    mlp_dim=16,
+    history_size=2,
+    frameskip=1,
+    action_emb_dim=4,
+    proprio_emb_dim=4,
+)
 P, DV, DP = 4, 8, 3  # patches, pixel features, proprio numbers
 #: a one-layer DINOv2 of width 8 with patch 8 (4 patches at 16x16)
-DINO = dict(hidden_size=8, num_hidden_layers=1, num_attention_heads=2, intermediate_size=16, patch_size=8, image_size=IMAGE)
+DINO = dict(
+    hidden_size=8, num_hidden_layers=1, num_attention_heads=2, intermediate_size=16, patch_size=8, image_size=IMAGE
+)
 
 
 def make(seed: int = 0, **overrides) -> nn.Module:
@@ -43,7 +58,10 @@ def proprio_model():
 def plan_info(b: int, s: int, t: int = 1, proprio: bool = False) -> dict:
     """What a solver passes: each env's context and goal expanded over its S candidates."""
     ctx, goal = images(b, t), images(b, 1, seed=1)
-    info = {keys.PIXELS: ctx.unsqueeze(1).expand(b, s, *ctx.shape[1:]), keys.GOAL: goal.unsqueeze(1).expand(b, s, *goal.shape[1:])}
+    info = {
+        keys.PIXELS: ctx.unsqueeze(1).expand(b, s, *ctx.shape[1:]),
+        keys.GOAL: goal.unsqueeze(1).expand(b, s, *goal.shape[1:]),
+    }
     if proprio:
         info[keys.PROPRIO] = randn(b, t, DP, seed=2).unsqueeze(1).expand(b, s, t, DP)
         info[keys.GOAL_PROPRIO] = randn(b, 1, DP, seed=3).unsqueeze(1).expand(b, s, 1, DP)
@@ -74,9 +92,15 @@ def test_registry_names_and_aliases():
 
 def test_state_dict_uses_upstream_names_and_the_encoder_is_frozen(proprio_model):
     names = set(proprio_model.state_dict())
-    assert {"predictor.pos_embedding", "predictor.transformer.layers.0.0.bias", "predictor.transformer.layers.0.0.to_qkv.weight",
-            "predictor.transformer.layers.0.1.net.1.weight", "predictor.transformer.norm.weight",
-            "extra_encoders.action.patch_embed.weight", "extra_encoders.proprio.patch_embed.weight"} <= names
+    assert {
+        "predictor.pos_embedding",
+        "predictor.transformer.layers.0.0.bias",
+        "predictor.transformer.layers.0.0.to_qkv.weight",
+        "predictor.transformer.layers.0.1.net.1.weight",
+        "predictor.transformer.norm.weight",
+        "extra_encoders.action.patch_embed.weight",
+        "extra_encoders.proprio.patch_embed.weight",
+    } <= names
     assert any(n.startswith("backbone.backbone.") for n in names)
     assert not any(p.requires_grad for p in proprio_model.backbone.parameters())
     proprio_model.train()
@@ -88,7 +112,13 @@ def test_presets_render_trees_without_building():
         tree = wm.get_config("prejepa", preset).target_tree(2)
         assert json.loads(json.dumps(tree)) == tree
     paper = wm.get_config("prejepa", "paper")
-    assert (paper.backbone, paper.image_size, paper.frameskip, paper.history_size, paper.num_patches) == ("dinov2_small", 224, 5, 3, 256)
+    assert (paper.backbone, paper.image_size, paper.frameskip, paper.history_size, paper.num_patches) == (
+        "dinov2_small",
+        224,
+        5,
+        3,
+        256,
+    )
     assert paper.target_tree(2)["predictor"]["dim"] == 384 + 10
     assert wm.get_config("prejepa", "paper", proprio_dim=4).target_tree(2)["predictor"]["dim"] == 384 + 20
 
@@ -101,7 +131,9 @@ def test_encode_shapes(proprio_model, model):
     assert out["pixels_emb"].shape == (3, 2, P, DV)
     assert out["proprio_emb"].shape == out["action_emb"].shape == (3, 2, 4)
     assert out["emb"].shape == (3, 2, P, DV + 8)
-    assert_close(out["emb"][..., DV : DV + 4], out["proprio_emb"].unsqueeze(2).expand(3, 2, P, 4))  # tiled on every patch
+    assert_close(
+        out["emb"][..., DV : DV + 4], out["proprio_emb"].unsqueeze(2).expand(3, 2, P, 4)
+    )  # tiled on every patch
     assert model.encode({keys.PIXELS: images(3, 2)})["emb"].shape == (3, 2, P, DV)  # pixels only, no action
 
 
@@ -199,12 +231,17 @@ def test_cost_prefers_the_actions_that_reach_the_goal():
         action.patch_embed.bias.zero_()
     model = PreJEPA(_Position(), _Integrator(), {"action": action}, history_size=1, interpolate_pos_encoding=False)
     start, goal = torch.tensor([0.0, 0.0]), torch.tensor([2.0, 1.0])
-    cand = torch.stack([
-        torch.tensor([[1.0, 0.0], [1.0, 1.0], [0.0, 0.0]]),  # reaches (2, 1)
-        torch.tensor([[1.0, 0.0], [0.0, 0.0], [0.0, 0.0]]),  # stops short
-        torch.tensor([[-1.0, 0.0], [-1.0, -1.0], [0.0, 0.0]]),  # goes the other way
-    ])[None]  # (1, 3, 3, 2)
-    info = {keys.PIXELS: start.view(1, 1, 1, 2, 1, 1).expand(1, 3, 1, 2, 1, 1), keys.GOAL: goal.view(1, 1, 1, 2, 1, 1).expand(1, 3, 1, 2, 1, 1)}
+    cand = torch.stack(
+        [
+            torch.tensor([[1.0, 0.0], [1.0, 1.0], [0.0, 0.0]]),  # reaches (2, 1)
+            torch.tensor([[1.0, 0.0], [0.0, 0.0], [0.0, 0.0]]),  # stops short
+            torch.tensor([[-1.0, 0.0], [-1.0, -1.0], [0.0, 0.0]]),  # goes the other way
+        ]
+    )[None]  # (1, 3, 3, 2)
+    info = {
+        keys.PIXELS: start.view(1, 1, 1, 2, 1, 1).expand(1, 3, 1, 2, 1, 1),
+        keys.GOAL: goal.view(1, 1, 1, 2, 1, 1).expand(1, 3, 1, 2, 1, 1),
+    }
     cost = model.get_cost(info, cand)
     assert cost.argmin().item() == 0 and cost[0, 0] == 0
     assert cost[0, 1] < cost[0, 2]
@@ -244,12 +281,28 @@ def test_trains_with_proprio_through_the_trainer(_stablewm_home):
     rng = np.random.default_rng(0)
     _stablewm_home.mkdir(parents=True, exist_ok=True)
     with HDF5Writer(_stablewm_home / "prop.h5") as writer:
-        writer.write_episodes([{
-            "pixels": rng.integers(0, 256, (6, IMAGE, IMAGE, 3), dtype=np.uint8),
-            "action": rng.normal(size=(6, 2)).astype(np.float32),
-            "proprio": rng.normal(size=(6, DP)).astype(np.float32),
-        } for _ in range(3)])
-    result = train("prejepa", "prop", steps=3, batch_size=4, progress=False, name="p", val_every=0, **NET, proprio_dim=DP, warmup_steps=0)
+        writer.write_episodes(
+            [
+                {
+                    "pixels": rng.integers(0, 256, (6, IMAGE, IMAGE, 3), dtype=np.uint8),
+                    "action": rng.normal(size=(6, 2)).astype(np.float32),
+                    "proprio": rng.normal(size=(6, DP)).astype(np.float32),
+                }
+                for _ in range(3)
+            ]
+        )
+    result = train(
+        "prejepa",
+        "prop",
+        steps=3,
+        batch_size=4,
+        progress=False,
+        name="p",
+        val_every=0,
+        **NET,
+        proprio_dim=DP,
+        warmup_steps=0,
+    )
     protocol = json.loads((result.folder / "protocol.json").read_text())
     assert set(protocol["normalizers"]) == {"action", "proprio"}
     assert np.isfinite(result.train_loss)
@@ -279,13 +332,29 @@ def test_upstream_target_names_load(dinov2_dir, _stablewm_home):
     shutil.copytree(folder, backbone_dir("dinov2_small"))
     tree = {
         "_target_": "stable_worldmodel.wm.PreJEPA",
-        "encoder": {"_target_": "stable_pretraining.backbone.EvalOnly",
-                    "backbone": {"_target_": "stable_worldmodel.wm.prejepa.module.create_backbone", "name": "dinov2_small"}},
-        "predictor": {"_target_": "stable_worldmodel.wm.prejepa.module.CausalPredictor", "num_patches": 4, "num_frames": 2,
-                      "dim": 8 + 4, "depth": 1, "heads": 2, "mlp_dim": 16, "dim_head": 4},
-        "extra_encoders": {"_target_": "torch.nn.ModuleDict", "modules": {
-            "action": {"_target_": "stable_worldmodel.wm.prejepa.module.Embedder", "in_chans": A, "emb_dim": 4}}},
-        "history_size": 2, "num_pred": 1, "interpolate_pos_encoding": True,
+        "encoder": {
+            "_target_": "stable_pretraining.backbone.EvalOnly",
+            "backbone": {"_target_": "stable_worldmodel.wm.prejepa.module.create_backbone", "name": "dinov2_small"},
+        },
+        "predictor": {
+            "_target_": "stable_worldmodel.wm.prejepa.module.CausalPredictor",
+            "num_patches": 4,
+            "num_frames": 2,
+            "dim": 8 + 4,
+            "depth": 1,
+            "heads": 2,
+            "mlp_dim": 16,
+            "dim_head": 4,
+        },
+        "extra_encoders": {
+            "_target_": "torch.nn.ModuleDict",
+            "modules": {
+                "action": {"_target_": "stable_worldmodel.wm.prejepa.module.Embedder", "in_chans": A, "emb_dim": 4}
+            },
+        },
+        "history_size": 2,
+        "num_pred": 1,
+        "interpolate_pos_encoding": True,
     }
     torch.manual_seed(0)
     built = wm.instantiate(tree).eval()
@@ -294,8 +363,10 @@ def test_upstream_target_names_load(dinov2_dir, _stablewm_home):
     pixels = images(2, 1)
     with torch.no_grad():
         assert loaded.encode({keys.PIXELS: pixels})["emb"].shape == (2, 1, 4, 8)
-        assert torch.equal(loaded.rollout({keys.PIXELS: pixels}, randn(2, 2, A))["predicted_emb"],
-                           built.rollout({keys.PIXELS: pixels}, randn(2, 2, A))["predicted_emb"])
+        assert torch.equal(
+            loaded.rollout({keys.PIXELS: pixels}, randn(2, 2, A))["predicted_emb"],
+            built.rollout({keys.PIXELS: pixels}, randn(2, 2, A))["predicted_emb"],
+        )
 
 
 # -- backbones -----------------------------------------------------------------------------------
@@ -309,7 +380,12 @@ def test_dinov2_loads_from_a_local_folder_and_file(dinov2_dir):
         for path in (folder, folder / "model.safetensors"):
             loaded = create_backbone("dinov2_small", path=path).eval()
             assert_close(loaded(x, interpolate_pos_encoding=True).last_hidden_state, expected)
-    model = make(backbone="dinov2_small", pretrained=True, backbone_path=str(folder), backbone_overrides={"hidden_size": 8, "patch_size": 8})
+    model = make(
+        backbone="dinov2_small",
+        pretrained=True,
+        backbone_path=str(folder),
+        backbone_overrides={"hidden_size": 8, "patch_size": 8},
+    )
     with torch.no_grad():
         out = model.encode({keys.PIXELS: x[:, None]})
     assert_close(out["pixels_emb"][:, 0], expected[:, 1:])  # the patch tokens, CLS dropped
@@ -320,12 +396,20 @@ def test_random_backbones_of_each_family():
     from stable_worldmodel.wm.backbones import create_backbone
 
     x = images(2)
-    small = dict(hidden_size=8, num_hidden_layers=1, num_attention_heads=2, intermediate_size=16, patch_size=8, image_size=IMAGE)
+    small = dict(
+        hidden_size=8, num_hidden_layers=1, num_attention_heads=2, intermediate_size=16, patch_size=8, image_size=IMAGE
+    )
     assert create_backbone("dinov2_small", pretrained=False, **small)(x).last_hidden_state.shape == (2, 5, 8)
     assert create_backbone("vit_base_patch16", pretrained=False, **small)(x).last_hidden_state.shape == (2, 5, 8)
-    resnet = create_backbone("resnet_50", pretrained=False, hidden_sizes=[8, 8, 8, 8], embedding_size=8, depths=[1, 1, 1, 1])
+    resnet = create_backbone(
+        "resnet_50", pretrained=False, hidden_sizes=[8, 8, 8, 8], embedding_size=8, depths=[1, 1, 1, 1]
+    )
     assert isinstance(resnet.classifier[1], nn.LayerNorm) and resnet(x).logits.shape == (2, 8)
-    assert create_backbone("cnn", image_size=IMAGE, width=8, hidden_size=8, grid=2)(x).last_hidden_state.shape == (2, 5, 8)
+    assert create_backbone("cnn", image_size=IMAGE, width=8, hidden_size=8, grid=2)(x).last_hidden_state.shape == (
+        2,
+        5,
+        8,
+    )
 
 
 def test_blur_backbone_tokens_are_the_blurred_pooled_picture():
@@ -343,7 +427,10 @@ def test_blur_backbone_tokens_are_the_blurred_pooled_picture():
     flat[0, 1, :8, 8:] = 1.0  # green in the top-right quarter only
     tokens = create_backbone("blur", image_size=IMAGE, sigma=1e-3, pool=2, grid=2)(flat).last_hidden_state[0, 1:]
     assert torch.count_nonzero(tokens[[0, 2, 3]]) == 0
-    assert torch.equal(tokens[1].reshape(3, 4, 4)[1], torch.ones(4, 4)) and torch.count_nonzero(tokens[1].reshape(3, 4, 4)[[0, 2]]) == 0
+    assert (
+        torch.equal(tokens[1].reshape(3, 4, 4)[1], torch.ones(4, 4))
+        and torch.count_nonzero(tokens[1].reshape(3, 4, 4)[[0, 2]]) == 0
+    )
 
 
 def test_blur_features_grow_with_the_distance_between_dots():
@@ -360,7 +447,7 @@ def test_blur_features_grow_with_the_distance_between_dots():
 
     goal = dot(4)
     costs = [float((dot(c) - goal).pow(2).mean()) for c in range(4, 21, 2)]
-    assert all(a < b for a, b in zip(costs, costs[1:])), costs
+    assert all(a < b for a, b in zip(costs, costs[1:], strict=False)), costs
 
 
 def _dot_frames(size: int) -> tuple[np.ndarray, torch.Tensor]:
@@ -378,7 +465,9 @@ def _distance_follows_separation(name: str, seed: int, size: int = 32) -> float:
     from stable_worldmodel.wm.backbones import create_backbone
 
     torch.manual_seed(seed)  # cnn draws from the global RNG, cnn_aa from its own seed
-    enc = create_backbone(name, image_size=size, width=8, hidden_size=8, grid=2, **({"seed": seed} if name == "cnn_aa" else {})).eval()
+    enc = create_backbone(
+        name, image_size=size, width=8, hidden_size=8, grid=2, **({"seed": seed} if name == "cnn_aa" else {})
+    ).eval()
     pos, frames = _dot_frames(size)
     with torch.no_grad():
         feats = enc(frames).last_hidden_state[:, 1:].flatten(1)
@@ -394,7 +483,9 @@ def test_antialiased_cnn_backbone_shapes_and_state():
     from stable_worldmodel.wm.backbones import create_backbone
     from stable_worldmodel.wm.prejepa.module import AntialiasedPatchCNN, binomial_taps
 
-    assert torch.equal(binomial_taps(3), torch.tensor([0.25, 0.5, 0.25])) and torch.equal(binomial_taps(1), torch.ones(1))
+    assert torch.equal(binomial_taps(3), torch.tensor([0.25, 0.5, 0.25])) and torch.equal(
+        binomial_taps(1), torch.ones(1)
+    )
     assert_close(binomial_taps(5), torch.tensor([1.0, 4, 6, 4, 1]) / 16)
     torch.manual_seed(0)
     enc = create_backbone("cnn_aa", image_size=IMAGE, width=8, hidden_size=8, grid=2, taps=3)
@@ -414,7 +505,9 @@ def test_antialiased_cnn_backbone_shapes_and_state():
     torch.manual_seed(1)
     again = create_backbone("cnn_aa", image_size=IMAGE, width=8, hidden_size=8, grid=2, taps=3)
     assert all(torch.equal(v, again.state_dict()[k]) for k, v in state.items())
-    assert float(torch.rand(1)) == float(torch.rand(1, generator=torch.Generator().manual_seed(1)))  # caller's RNG untouched
+    assert float(torch.rand(1)) == float(
+        torch.rand(1, generator=torch.Generator().manual_seed(1))
+    )  # caller's RNG untouched
     other = create_backbone("cnn_aa", image_size=IMAGE, width=8, hidden_size=8, grid=2, taps=3, seed=1)
     assert not torch.equal(other.head.weight, enc.head.weight)
     with pytest.raises(ConfigError, match="seed to be an int >= 0 or None"):
@@ -478,9 +571,18 @@ def test_training_fits_the_blur_encoder_to_the_training_split(toy, _stablewm_hom
 
     protocol = json.loads((result.folder / "protocol.json").read_text())
     data = HDF5Dataset(toy)
-    rows = np.concatenate([np.arange(o, o + n) for o, n in zip(np.asarray(data.offsets)[protocol["train_episodes"]],
-                                                                np.asarray(data.lengths)[protocol["train_episodes"]])])
-    pixels = torch.from_numpy(np.concatenate([data._read("pixels", int(r), int(r) + 1) for r in rows])).permute(0, 3, 1, 2)
+    rows = np.concatenate(
+        [
+            np.arange(o, o + n)
+            for o, n in zip(
+                np.asarray(data.offsets)[protocol["train_episodes"]],
+                np.asarray(data.lengths)[protocol["train_episodes"]], strict=False,
+            )
+        ]
+    )
+    pixels = torch.from_numpy(np.concatenate([data._read("pixels", int(r), int(r) + 1) for r in rows])).permute(
+        0, 3, 1, 2
+    )
     with torch.no_grad():
         feats = loaded.encode_pixels(((pixels.float() / 255 - 0.5) / 0.5)[:, None])[:, 0]
     assert_close(feats.mean(0), torch.zeros_like(feats[0]), atol=2e-3, rtol=0)  # standardized over the training frames
@@ -556,7 +658,9 @@ def test_configs_need_no_torch():
     import subprocess
     import sys
 
-    code = ("import sys; sys.modules['torch'] = sys.modules['transformers'] = None  # any import fails fast\n"
-            "import stable_worldmodel.wm as wm\n"
-            "[wm.get_config('prejepa', p).target_tree(2) for p in ('tiny', 'small', 'paper')]")
+    code = (
+        "import sys; sys.modules['torch'] = sys.modules['transformers'] = None  # any import fails fast\n"
+        "import stable_worldmodel.wm as wm\n"
+        "[wm.get_config('prejepa', p).target_tree(2) for p in ('tiny', 'small', 'paper')]"
+    )
     subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120)

@@ -16,7 +16,9 @@ from stable_worldmodel.errors import ConfigError, DatasetFormatError, SpaceError
 
 A = ACTION_DIM
 #: a width-8 ConvEncoder at 16x16, a latent of 16 (2 simplices of 8), MLPs of 8, 3 Q heads, 2 transitions
-NET = dict(image_size=IMAGE, cnn_width=8, embed_dim=16, mlp_dim=8, enc_dim=8, num_q=3, num_bins=21, frameskip=1, num_preds=2)
+NET = dict(
+    image_size=IMAGE, cnn_width=8, embed_dim=16, mlp_dim=8, enc_dim=8, num_q=3, num_bins=21, frameskip=1, num_preds=2
+)
 L = 16
 
 
@@ -37,8 +39,11 @@ def plan_info(b: int, s: int, t: int = 1) -> dict:
 
 
 def batch(b: int = 4, t: int = 3, seed: int = 0) -> dict:
-    return {keys.PIXELS: images(b, t, seed=seed), keys.ACTION: randn(b, t, A, seed=seed + 1).clamp(-1, 1),
-            keys.REWARD: randn(b, t, seed=seed + 2)}
+    return {
+        keys.PIXELS: images(b, t, seed=seed),
+        keys.ACTION: randn(b, t, A, seed=seed + 1).clamp(-1, 1),
+        keys.REWARD: randn(b, t, seed=seed + 2),
+    }
 
 
 # -- maths ------------------------------------------------------------------------------------------
@@ -61,7 +66,10 @@ def test_two_hot_round_trip():
     assert_close(two_hot_inv(probs.clamp_min(1e-30).log(), -10.0, 10.0), x, rtol=1e-4, atol=1e-4)
     assert_close(symexp(symlog(x)), x, rtol=1e-5, atol=1e-5)
     # outside symexp([vmin, vmax]) the value saturates at the last bin
-    assert_close(two_hot_inv(two_hot(torch.tensor([1e6]), 11, -2.0, 2.0).clamp_min(1e-30).log(), -2.0, 2.0), symexp(torch.tensor([2.0])))
+    assert_close(
+        two_hot_inv(two_hot(torch.tensor([1e6]), 11, -2.0, 2.0).clamp_min(1e-30).log(), -2.0, 2.0),
+        symexp(torch.tensor([2.0])),
+    )
 
 
 # -- verbs ------------------------------------------------------------------------------------------
@@ -77,8 +85,16 @@ def test_shapes_of_every_verb(model):
         assert model.get_cost({keys.PIXELS: images(2, 1)}, randn(2, 4, A)).shape == (2,)  # no S axis
         assert model.get_action({keys.PIXELS: images(2, 2)}).shape == (2, A)
         assert model.get_action({keys.PIXELS: images(2)}, horizon=3).shape == (2, 3, A)  # a warm start
-        assert model.get_action({keys.PIXELS: images(2, 1)}, horizon=3, prefix_actions=randn(2, 1, A)).shape == (2, 3, A)
-        assert model.rollout(model.encode_obs({keys.PIXELS: images(2)}), 4).shape == (2, 4, A)  # upstream's policy rollout
+        assert model.get_action({keys.PIXELS: images(2, 1)}, horizon=3, prefix_actions=randn(2, 1, A)).shape == (
+            2,
+            3,
+            A,
+        )
+        assert model.rollout(model.encode_obs({keys.PIXELS: images(2)}), 4).shape == (
+            2,
+            4,
+            A,
+        )  # upstream's policy rollout
         assert model.q_values(randn(2, L), randn(2, A)).shape == (3, 2)
         action = model.get_action({keys.PIXELS: images(5, 1)})
     assert (action.abs() <= 1).all()
@@ -126,7 +142,9 @@ def test_mppi_plans_on_its_cost_from_a_prior_warm_start(model):
     from stable_worldmodel.solver import MPPISolver
 
     solver = MPPISolver(model, num_samples=8, n_steps=2, topk=4)
-    solver.configure(action_space=gym.spaces.Box(-1.0, 1.0, (2, A), np.float32), n_envs=2, config=PlanConfig(3, 1, action_block=1))
+    solver.configure(
+        action_space=gym.spaces.Box(-1.0, 1.0, (2, A), np.float32), n_envs=2, config=PlanConfig(3, 1, action_block=1)
+    )
     info = {keys.PIXELS: images(2, 1)}
     with torch.no_grad():
         warm = model.get_action(info, horizon=3)
@@ -157,12 +175,12 @@ def test_loss_terms(model):
         for p in model.qs.parameters():
             p.add_(1.0)
         model.loss(batch())
-    for old, new in zip(before, model.target_qs.parameters()):
+    for old, new in zip(before, model.target_qs.parameters(), strict=False):
         assert_close(new, old + 0.01, atol=1e-6, rtol=0)
     moved = [p.clone() for p in model.target_qs.parameters()]
     with torch.no_grad():
         model.eval().loss(batch())  # evaluation leaves them alone
-    assert all(torch.equal(a, b) for a, b in zip(moved, model.target_qs.parameters()))
+    assert all(torch.equal(a, b) for a, b in zip(moved, model.target_qs.parameters(), strict=False))
 
 
 def test_bc_coef_makes_the_prior_imitate_the_data():
@@ -213,13 +231,25 @@ def test_save_load_round_trip(model):
     cand = randn(2, 3, 3, A)
     with torch.no_grad():
         assert torch.equal(loaded.get_cost(plan_info(2, 3), cand), model.get_cost(plan_info(2, 3), cand))
-    assert all(torch.equal(a, b) for a, b in zip(loaded.state_dict().values(), model.state_dict().values()))
+    assert all(torch.equal(a, b) for a, b in zip(loaded.state_dict().values(), model.state_dict().values(), strict=False))
 
 
 def test_upstream_cnn_and_proprio():
     """Upstream's CNN (``pixel_encoder="tdmpc2"``, 64x64 -> 32 x 4 x 4) and a proprio encoder."""
-    cfg = wm.get_config("tdmpc2", "tiny", pixel_encoder="tdmpc2", num_channels=4, embed_dim=8, mlp_dim=8, enc_dim=8,
-                        num_q=2, num_bins=11, frameskip=1, proprio_dim=3, proprio_emb_dim=8)
+    cfg = wm.get_config(
+        "tdmpc2",
+        "tiny",
+        pixel_encoder="tdmpc2",
+        num_channels=4,
+        embed_dim=8,
+        mlp_dim=8,
+        enc_dim=8,
+        num_q=2,
+        num_bins=11,
+        frameskip=1,
+        proprio_dim=3,
+        proprio_emb_dim=8,
+    )
     model = wm.instantiate(cfg.target_tree(A)).eval()
     assert model.pixel_encoder.in_features == 4 * 4 * 4 and model.latent_dim == 16
     info = {keys.PIXELS: randn(2, 1, 3, 64, 64), keys.PROPRIO: randn(2, 1, 3)}
@@ -236,8 +266,18 @@ def test_trains_on_the_toy_dataset(toy):
 
     from stable_worldmodel.train import train
 
-    result = train("tdmpc2", "toy", steps=2, batch_size=4, device="cpu", progress=False, name="td", val_every=0,
-                   warmup_steps=0, **{**NET, "num_preds": 1})
+    result = train(
+        "tdmpc2",
+        "toy",
+        steps=2,
+        batch_size=4,
+        device="cpu",
+        progress=False,
+        name="td",
+        val_every=0,
+        warmup_steps=0,
+        **{**NET, "num_preds": 1},
+    )
     assert np.isfinite(result.train_loss)
     loaded = wm.load_pretrained("td")
     with torch.no_grad():
@@ -248,7 +288,9 @@ def test_trains_on_the_toy_dataset(toy):
     from stable_worldmodel.errors import ConfigError
     from stable_worldmodel.planning.learned import PlanSettings, world_model_policy
 
-    policy, plan_protocol = world_model_policy("td", PlanSettings(solver="mppi", horizon=2, samples=8, iterations=1), device="cpu")
+    policy, plan_protocol = world_model_policy(
+        "td", PlanSettings(solver="mppi", horizon=2, samples=8, iterations=1), device="cpu"
+    )
     assert plan_protocol["plan"]["cost"] == "auto" and policy.solver.model is not None
     with pytest.raises(ConfigError, match="cost='min'.*TDMPC2.*own cost.*cost='auto'"):
         world_model_policy("td", PlanSettings(cost="min"), device="cpu")
@@ -262,8 +304,19 @@ def test_validation_reports_the_world_model_loss_and_it_falls(toy):
     from stable_worldmodel.train import train
 
     torch.manual_seed(0)
-    result = train("tdmpc2", "toy", steps=60, batch_size=8, device="cpu", progress=False, name="tdv", val_every=20,
-                   warmup_steps=0, seed=0, **NET)
+    result = train(
+        "tdmpc2",
+        "toy",
+        steps=60,
+        batch_size=8,
+        device="cpu",
+        progress=False,
+        name="tdv",
+        val_every=20,
+        warmup_steps=0,
+        seed=0,
+        **NET,
+    )
     records = [json.loads(line) for line in (result.folder / "metrics.jsonl").read_text().splitlines()]
     val = [r["val/loss"] for r in records if "val/loss" in r]
     assert len(val) == 3 and val[0] > val[1] > val[2] and val[-1] < 0.9 * val[0], val  # 0.546, 0.480, 0.471 here
@@ -290,9 +343,15 @@ def test_batch_reward_is_the_sum_over_each_action_block(_stablewm_home):
 
     n = 12
     rng = np.random.default_rng(0)
-    name = _write(_stablewm_home, "rew", {"pixels": rng.integers(0, 256, (n, IMAGE, IMAGE, 3), dtype=np.uint8),
-                                          "action": rng.normal(size=(n, A)).astype(np.float32),
-                                          "reward": np.arange(n, dtype=np.float64)})  # row i earned reward i
+    name = _write(
+        _stablewm_home,
+        "rew",
+        {
+            "pixels": rng.integers(0, 256, (n, IMAGE, IMAGE, 3), dtype=np.uint8),
+            "action": rng.normal(size=(n, A)).astype(np.float32),
+            "reward": np.arange(n, dtype=np.float64),
+        },
+    )  # row i earned reward i
     cfg = wm.get_config("tdmpc2", "tiny", **{**NET, "frameskip": 2, "num_preds": 2, "val_fraction": 0.0})
     data = TrainData(name, cfg, seed=0, device=torch.device("cpu"))
     out = data.batch(np.array([0, 3]))  # windows starting at rows 0 and 3 (frames every 2 rows)
@@ -307,8 +366,14 @@ def test_missing_reward_column_says_how_to_record_one(_stablewm_home):
     from stable_worldmodel.train import train
 
     rng = np.random.default_rng(0)
-    _write(_stablewm_home, "noreward", {"pixels": rng.integers(0, 256, (6, IMAGE, IMAGE, 3), dtype=np.uint8),
-                                        "action": rng.normal(size=(6, A)).astype(np.float32)})
+    _write(
+        _stablewm_home,
+        "noreward",
+        {
+            "pixels": rng.integers(0, 256, (6, IMAGE, IMAGE, 3), dtype=np.uint8),
+            "action": rng.normal(size=(6, A)).astype(np.float32),
+        },
+    )
     with pytest.raises(DatasetFormatError) as err:
         train("tdmpc2", "noreward", steps=1, batch_size=2, device="cpu", progress=False, name="x", **NET)
     message = str(err.value)
@@ -329,9 +394,17 @@ def test_goal_proprio_makes_it_goal_conditioned(_stablewm_home):
     n = 16
     goal = np.repeat(np.array([[10.0, 20.0], [30.0, 40.0]], np.float32), n // 2, axis=0)
     proprio = rng.normal(size=(n, 2)).astype(np.float32)
-    name = _write(_stablewm_home, "goals", {"pixels": rng.integers(0, 256, (n, IMAGE, IMAGE, 3), dtype=np.uint8),
-                                           "action": rng.normal(size=(n, A)).astype(np.float32), "proprio": proprio,
-                                           "goal_proprio": goal, "reward": -np.abs(proprio - goal).sum(1)})
+    name = _write(
+        _stablewm_home,
+        "goals",
+        {
+            "pixels": rng.integers(0, 256, (n, IMAGE, IMAGE, 3), dtype=np.uint8),
+            "action": rng.normal(size=(n, A)).astype(np.float32),
+            "proprio": proprio,
+            "goal_proprio": goal,
+            "reward": -np.abs(proprio - goal).sum(1),
+        },
+    )
     net = {**NET, "proprio_dim": 2, "goal_proprio_dim": 2, "proprio_emb_dim": 8, "val_fraction": 0.0}
     cfg = wm.get_config("tdmpc2", "tiny", **net)
     assert cfg.extra_columns == {"proprio": 2, "goal_proprio": 2}
@@ -353,15 +426,19 @@ def test_goal_proprio_makes_it_goal_conditioned(_stablewm_home):
     with torch.no_grad():
         z = [model.encode({**info, "goal_proprio": torch.full((1, 1, 2), v)})["emb"] for v in (-1.0, 1.0)]
     assert not torch.allclose(z[0], z[1])
-    with pytest.raises(ConfigError, match="goal_proprio_dim equal to the width of column 'goal_proprio'.*goal_proprio_dim=3 and 2"):
-        TrainData(name, wm.get_config("tdmpc2", "tiny", **{**net, "goal_proprio_dim": 3}), seed=0, device=torch.device("cpu"))
+    with pytest.raises(
+        ConfigError, match="goal_proprio_dim equal to the width of column 'goal_proprio'.*goal_proprio_dim=3 and 2"
+    ):
+        TrainData(
+            name, wm.get_config("tdmpc2", "tiny", **{**net, "goal_proprio_dim": 3}), seed=0, device=torch.device("cpu")
+        )
     with pytest.raises(ConfigError, match="goal_proprio_dim to be an int >= 0"):
         wm.get_config("tdmpc2", "tiny", goal_proprio_dim=-2)
 
 
 # -- bad inputs -------------------------------------------------------------------------------------
 def test_bad_inputs_raise_typed_errors(model):
-    from stable_worldmodel.wm.tdmpc2 import SimNorm, TDMPC2
+    from stable_worldmodel.wm.tdmpc2 import TDMPC2, SimNorm
 
     with pytest.raises(ConfigError, match="multiple of simnorm_dim=8"):
         wm.get_config("tdmpc2", embed_dim=12)
@@ -406,9 +483,11 @@ def test_configs_need_no_torch():
     import subprocess
     import sys
 
-    code = ("import sys; sys.modules['torch'] = None  # any import fails fast\n"
-            "import json, stable_worldmodel.wm as wm\n"
-            "print(json.dumps([wm.get_config('tdmpc2', p).target_tree(2) for p in ('tiny', 'small', 'paper')]))")
+    code = (
+        "import sys; sys.modules['torch'] = None  # any import fails fast\n"
+        "import json, stable_worldmodel.wm as wm\n"
+        "print(json.dumps([wm.get_config('tdmpc2', p).target_tree(2) for p in ('tiny', 'small', 'paper')]))"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120)
     trees = json.loads(out.stdout)
     assert [t["cfg"]["wm"]["encoder"] for t in trees] == ["conv", "tdmpc2", "tdmpc2"]

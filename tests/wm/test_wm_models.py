@@ -105,8 +105,10 @@ def test_get_cost_shape(jepa):
 def test_get_cost_encodes_context_and_goal_once_per_info(jepa):
     b, s = 2, 4
     ctx, goal = images(b, 1), images(b, 1, seed=1)
-    info = {keys.PIXELS: ctx.unsqueeze(1).expand(b, s, 1, 3, IMAGE, IMAGE),
-            keys.GOAL: goal.unsqueeze(1).expand(b, s, 1, 3, IMAGE, IMAGE)}
+    info = {
+        keys.PIXELS: ctx.unsqueeze(1).expand(b, s, 1, 3, IMAGE, IMAGE),
+        keys.GOAL: goal.unsqueeze(1).expand(b, s, 1, 3, IMAGE, IMAGE),
+    }
     calls = count_encoder_calls(jepa.encoder)
     with torch.no_grad():
         first = jepa.get_cost(info, randn(b, s, 3, A))
@@ -125,8 +127,10 @@ def test_get_cost_of_batched_envs_equals_env_by_env(jepa):
     ctx, goal, cand = images(b, 1), images(b, 1, seed=1), randn(b, s, h, A, seed=2)
 
     def info(rows):
-        return {keys.PIXELS: ctx[rows].unsqueeze(1).expand(-1, s, -1, -1, -1, -1),
-                keys.GOAL: goal[rows].unsqueeze(1).expand(-1, s, -1, -1, -1, -1)}
+        return {
+            keys.PIXELS: ctx[rows].unsqueeze(1).expand(-1, s, -1, -1, -1, -1),
+            keys.GOAL: goal[rows].unsqueeze(1).expand(-1, s, -1, -1, -1, -1),
+        }
 
     with torch.no_grad():
         batched = jepa.get_cost(info(slice(None)), cand)
@@ -138,8 +142,10 @@ def test_get_cost_accepts_an_info_without_the_candidate_axis(jepa):
     b, s = 2, 4
     ctx, goal, cand = images(b, 2), images(b, 1, seed=1), randn(b, s, 3, A, seed=2)
     per_env = {keys.PIXELS: ctx, keys.GOAL: goal}  # (B, T, C, h, w), as the dummy model accepts too
-    per_candidate = {keys.PIXELS: ctx.unsqueeze(1).expand(b, s, 2, 3, IMAGE, IMAGE),
-                     keys.GOAL: goal.unsqueeze(1).expand(b, s, 1, 3, IMAGE, IMAGE)}
+    per_candidate = {
+        keys.PIXELS: ctx.unsqueeze(1).expand(b, s, 2, 3, IMAGE, IMAGE),
+        keys.GOAL: goal.unsqueeze(1).expand(b, s, 1, 3, IMAGE, IMAGE),
+    }
     with torch.no_grad():
         assert_close(jepa.get_cost(per_env, cand), jepa.get_cost(per_candidate, cand))
 
@@ -234,7 +240,12 @@ def test_dummy_get_cost_encodes_once_and_batches(dummy):
         assert cost.shape == (b, s) and len(calls) == 2
         assert_close(dummy.get_cost(info, cand), cost)
         assert len(calls) == 2
-        single = torch.cat([dummy.get_cost({keys.PIXELS: ctx[i : i + 1], keys.GOAL: goal[i : i + 1]}, cand[i : i + 1]) for i in range(b)])
+        single = torch.cat(
+            [
+                dummy.get_cost({keys.PIXELS: ctx[i : i + 1], keys.GOAL: goal[i : i + 1]}, cand[i : i + 1])
+                for i in range(b)
+            ]
+        )
     assert_close(cost, single)
 
 
@@ -245,7 +256,9 @@ def test_dummy_loss(dummy, dot_data):
 
 
 # -- training lowers the loss ------------------------------------------------------------------
-@pytest.mark.parametrize("name,overrides", [("lewm", {"sigreg_num_proj": 64}), ("pldm", {}), ("dummy", {})], ids=["lewm", "pldm", "dummy"])
+@pytest.mark.parametrize(
+    "name,overrides", [("lewm", {"sigreg_num_proj": 64}), ("pldm", {}), ("dummy", {})], ids=["lewm", "pldm", "dummy"]
+)
 def test_training_lowers_the_loss(make_model, dot_data, name, overrides):
     model = make_model(name, **overrides).train()
     data = dot_data(8, 3)

@@ -43,7 +43,9 @@ def test_make_requires_a_positive_int_action_dim(bad):
         wm.make("dummy", action_dim=bad)
 
 
-@pytest.mark.parametrize("field,value", [("encoder", "vti"), ("embed_dim", 0), ("dropout", 1.0), ("lr", 0.0), ("projector_hidden", -1)])
+@pytest.mark.parametrize(
+    "field,value", [("encoder", "vti"), ("embed_dim", 0), ("dropout", 1.0), ("lr", 0.0), ("projector_hidden", -1)]
+)
 def test_config_values_are_checked(field, value):
     with pytest.raises(ConfigError, match=field if field != "lr" else "lr"):
         wm.get_config("lewm", "tiny", **{field: value})
@@ -116,8 +118,10 @@ def test_import_and_configs_pull_in_no_heavy_module():
 
 
 def test_vit_configs_need_no_torch():
-    code = ("import sys; sys.modules['torch'] = None  # any import of torch fails fast\n"
-            "import stable_worldmodel.wm as wm; wm.get_config('lewm', 'small').target_tree(2)")
+    code = (
+        "import sys; sys.modules['torch'] = None  # any import of torch fails fast\n"
+        "import stable_worldmodel.wm as wm; wm.get_config('lewm', 'small').target_tree(2)"
+    )
     subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120)
 
 

@@ -43,23 +43,44 @@ def test_vit_world_model_shapes(make_model):
 
 # -- upstream-style checkpoints --------------------------------------------------------------------
 def _mlp(d_in: int, d_out: int) -> dict:
-    return {"_target_": "stable_worldmodel.wm.lewm.module.MLP", "input_dim": d_in, "output_dim": d_out, "hidden_dim": 16,
-            "norm_fn": {"_target_": "torch.nn.BatchNorm1d", "_partial_": True}}
+    return {
+        "_target_": "stable_worldmodel.wm.lewm.module.MLP",
+        "input_dim": d_in,
+        "output_dim": d_out,
+        "hidden_dim": 16,
+        "norm_fn": {"_target_": "torch.nn.BatchNorm1d", "_partial_": True},
+    }
 
 
 UPSTREAM_CONFIG = {
     "_target_": "stable_worldmodel.wm.lewm.LeWM",
     "encoder": {
         "_target_": "stable_pretraining.backbone.utils.vit_hf",
-        "size": "tiny", "patch_size": 8, "image_size": IMAGE, "pretrained": False, "use_mask_token": False,
+        "size": "tiny",
+        "patch_size": 8,
+        "image_size": IMAGE,
+        "pretrained": False,
+        "use_mask_token": False,
         **VIT_SIZES,
     },
     "predictor": {
         "_target_": "stable_worldmodel.wm.lewm.module.Predictor",
-        "num_frames": 3, "input_dim": D, "hidden_dim": D, "output_dim": D, "depth": 1, "heads": 2, "mlp_dim": 16,
-        "dim_head": 4, "dropout": 0.0, "emb_dropout": 0.0,
+        "num_frames": 3,
+        "input_dim": D,
+        "hidden_dim": D,
+        "output_dim": D,
+        "depth": 1,
+        "heads": 2,
+        "mlp_dim": 16,
+        "dim_head": 4,
+        "dropout": 0.0,
+        "emb_dropout": 0.0,
     },
-    "action_encoder": {"_target_": "stable_worldmodel.wm.lewm.module.Embedder", "input_dim": FRAMESKIP * ACTION_DIM, "emb_dim": D},
+    "action_encoder": {
+        "_target_": "stable_worldmodel.wm.lewm.module.Embedder",
+        "input_dim": FRAMESKIP * ACTION_DIM,
+        "emb_dim": D,
+    },
     "projector": _mlp(D, D),
     "pred_proj": _mlp(D, D),
 }
@@ -69,21 +90,33 @@ def upstream_model() -> LeWM:
     """The model of ``UPSTREAM_CONFIG``, built by hand (no instantiate), with drawn AdaLN modulations."""
     torch.manual_seed(0)
     vit = transformers.ViTModel(
-        transformers.ViTConfig(image_size=IMAGE, patch_size=8, **VIT_SIZES), add_pooling_layer=False, use_mask_token=False
+        transformers.ViTConfig(image_size=IMAGE, patch_size=8, **VIT_SIZES),
+        add_pooling_layer=False,
+        use_mask_token=False,
     )
-    predictor = Predictor(num_frames=3, input_dim=D, hidden_dim=D, output_dim=D, depth=1, heads=2, mlp_dim=16, dim_head=4)
+    predictor = Predictor(
+        num_frames=3, input_dim=D, hidden_dim=D, output_dim=D, depth=1, heads=2, mlp_dim=16, dim_head=4
+    )
     model = LeWM(
-        vit, predictor, Embedder(input_dim=FRAMESKIP * ACTION_DIM, emb_dim=D),
-        MLP(D, 16, D, norm_fn=torch.nn.BatchNorm1d), MLP(D, 16, D, norm_fn=torch.nn.BatchNorm1d),
+        vit,
+        predictor,
+        Embedder(input_dim=FRAMESKIP * ACTION_DIM, emb_dim=D),
+        MLP(D, 16, D, norm_fn=torch.nn.BatchNorm1d),
+        MLP(D, 16, D, norm_fn=torch.nn.BatchNorm1d),
     )
     return condition_on_actions(model).eval()
 
 
 def to_transformers_4(state: dict) -> dict:
     """Rename transformers 5.x ViT parameters to the 4.x names that published checkpoints use."""
-    renames = {"attention.q_proj": "attention.attention.query", "attention.k_proj": "attention.attention.key",
-               "attention.v_proj": "attention.attention.value", "attention.o_proj": "attention.output.dense",
-               "mlp.fc1": "intermediate.dense", "mlp.fc2": "output.dense"}
+    renames = {
+        "attention.q_proj": "attention.attention.query",
+        "attention.k_proj": "attention.attention.key",
+        "attention.v_proj": "attention.attention.value",
+        "attention.o_proj": "attention.output.dense",
+        "mlp.fc1": "intermediate.dense",
+        "mlp.fc2": "output.dense",
+    }
     out = {}
     for key, value in state.items():
         if key.startswith("encoder.layers."):
@@ -91,7 +124,7 @@ def to_transformers_4(state: dict) -> dict:
             rest = ".".join(rest)
             for new, old in renames.items():
                 if rest.startswith(new + "."):
-                    rest = old + rest[len(new):]
+                    rest = old + rest[len(new) :]
             key = f"encoder.encoder.layer.{index}.{rest}"
         out[key] = value
     return out
@@ -122,7 +155,10 @@ def test_transformers_4_key_names_load(_stablewm_home):
     model = upstream_model()
     old = to_transformers_4(model.state_dict())
     assert "encoder.encoder.layer.0.attention.attention.query.weight" in old
-    assert "encoder.encoder.layer.0.output.dense.weight" in old and "encoder.encoder.layer.0.attention.output.dense.bias" in old
+    assert (
+        "encoder.encoder.layer.0.output.dense.weight" in old
+        and "encoder.encoder.layer.0.attention.output.dense.bias" in old
+    )
     assert not any(k.startswith("encoder.layers.") for k in old)
     write_upstream_checkpoint(_stablewm_home / "checkpoints" / "models--user--lewm-vit", old)
     loaded = load_pretrained("user/lewm-vit")

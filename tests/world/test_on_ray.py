@@ -32,7 +32,9 @@ def local_ray(tmp_path_factory):
     ray.shutdown()
 
 
-def _single(cache: Path, name: str, episodes: int, seed: int, policy: str = "expert", max_steps: int = 20) -> HDF5Dataset:
+def _single(
+    cache: Path, name: str, episodes: int, seed: int, policy: str = "expert", max_steps: int = 20
+) -> HDF5Dataset:
     with swm.World(TOY, 1, (16, 16), max_episode_steps=max_steps, verbose=0) as world:
         world.set_policy(swm.envs.expert_policy(TOY) if policy == "expert" else swm.policy.RandomPolicy(seed=seed))
         world.record_dataset(name, episodes=episodes, seed=seed, cache_dir=cache)
@@ -46,7 +48,9 @@ def _columns_equal(a: HDF5Dataset, b: HDF5Dataset) -> None:
 
 
 def test_sharded_dataset_equals_the_single_process_recording(local_ray, tmp_path):
-    folder = on_ray.record_dataset_on_ray(TOY, "toy", 7, seed=3, shards=3, image_size=16, max_steps=20, cache_dir=tmp_path, progress=False)
+    folder = on_ray.record_dataset_on_ray(
+        TOY, "toy", 7, seed=3, shards=3, image_size=16, max_steps=20, cache_dir=tmp_path, progress=False
+    )
     assert sorted(p.name for p in folder.glob("shard_*.h5")) == ["shard_00000.h5", "shard_00001.h5", "shard_00002.h5"]
     manifest = json.loads((folder / "manifest.json").read_text())
     assert [(s["seed"], s["episodes"]) for s in manifest["shards"]] == [(3, 3), (6, 2), (8, 2)]
@@ -62,10 +66,14 @@ def test_sharded_dataset_equals_the_single_process_recording(local_ray, tmp_path
 
     # a re-run records nothing more; other settings under the same name are refused
     mtimes = [p.stat().st_mtime_ns for p in sorted(folder.glob("shard_*.h5"))]
-    on_ray.record_dataset_on_ray(TOY, "toy", 7, seed=3, shards=5, image_size=16, max_steps=20, cache_dir=tmp_path, progress=False)
+    on_ray.record_dataset_on_ray(
+        TOY, "toy", 7, seed=3, shards=5, image_size=16, max_steps=20, cache_dir=tmp_path, progress=False
+    )
     assert [p.stat().st_mtime_ns for p in sorted(folder.glob("shard_*.h5"))] == mtimes
     with pytest.raises(ConfigError, match="same settings, got seed: 3 on disk, 4 now"):
-        on_ray.record_dataset_on_ray(TOY, "toy", 7, seed=4, image_size=16, max_steps=20, cache_dir=tmp_path, progress=False)
+        on_ray.record_dataset_on_ray(
+            TOY, "toy", 7, seed=4, image_size=16, max_steps=20, cache_dir=tmp_path, progress=False
+        )
 
 
 def _worker_pids(marker: str) -> list[int]:
@@ -131,7 +139,21 @@ def test_a_private_ray_stays_inside_the_project(local_ray, tmp_path):
 
 
 def test_swm_collect_and_eval_with_ray(local_ray, swm, _stablewm_home, error_line):
-    result = swm("collect", TOY, "-n", "3", "--policy", "expert", "--name", "tr", "--ray", "--image-size", "16", "--max-steps", "20")
+    result = swm(
+        "collect",
+        TOY,
+        "-n",
+        "3",
+        "--policy",
+        "expert",
+        "--name",
+        "tr",
+        "--ray",
+        "--image-size",
+        "16",
+        "--max-steps",
+        "20",
+    )
     assert result.exit_code == 0, result.output
     assert "on Ray to" in result.stdout and HDF5Dataset("tr").num_episodes == 3
     listed = swm("list", "dataset")
@@ -185,7 +207,12 @@ def test_an_evaluation_task_reads_checkpoints_from_the_drivers_cache(tmp_path, m
 
     seen = []
     monkeypatch.setenv("STABLEWM_HOME", str(tmp_path / "worker_default"))
-    monkeypatch.setattr(worlds, "evaluate_policy", lambda world, policy, *a, **k: seen.append(os.environ["STABLEWM_HOME"]) or
-                        {"episode_successes": [True], "episode_lengths": [3]})
+    monkeypatch.setattr(
+        worlds,
+        "evaluate_policy",
+        lambda world, policy, *a, **k: (
+            seen.append(os.environ["STABLEWM_HOME"]) or {"episode_successes": [True], "episode_lengths": [3]}
+        ),
+    )
     out = _evaluate_chunk("swm/Toy-v0", "random", [0], 16, 5, [], None, "cpu", str(tmp_path / "driver"))
     assert seen == [str(tmp_path / "driver")] and out == {"episode_successes": [True], "episode_lengths": [3]}

@@ -71,7 +71,7 @@ def test_round_trip(tmp_path, n, episodes, seed):
         assert f[keys.EP_OFFSET][:].tolist() == np.concatenate([[0], np.cumsum(lengths)[:-1]]).tolist()
         assert f[keys.PIXELS].shape == (lengths.sum(), 16, 16, 3) and f[keys.PIXELS].dtype == np.uint8
         assert not any(k.startswith("_") for k in f)
-        for ep, (off, length) in enumerate(zip(f[keys.EP_OFFSET][:], lengths)):
+        for ep, (off, length) in enumerate(zip(f[keys.EP_OFFSET][:], lengths, strict=False)):
             rows = seen[ep]
             assert len(rows) == length
             assert np.isnan(rows[0][keys.ACTION]).all()  # the reset row is kept
@@ -89,12 +89,16 @@ def test_round_trip(tmp_path, n, episodes, seed):
                     np.testing.assert_array_equal(got, np.stack([r[k] for r in rows]), err_msg=k)
     # windows read back equal the recorded infos
     for num_steps, frameskip in [(1, 1), (2, 2), (3, 1)]:
-        ds = HDF5Dataset(path, num_steps=num_steps, frameskip=frameskip, keys_to_load=[keys.PIXELS, keys.STATE, keys.ACTION])
+        ds = HDF5Dataset(
+            path, num_steps=num_steps, frameskip=frameskip, keys_to_load=[keys.PIXELS, keys.STATE, keys.ACTION]
+        )
         item = ds[len(ds) - 1]
         ep, start = ds.locate(len(ds) - 1)
         rows = seen[ep][start : start + num_steps * frameskip : frameskip]
         np.testing.assert_array_equal(item[keys.STATE].numpy(), np.stack([r[keys.STATE] for r in rows]))
-        np.testing.assert_array_equal(item[keys.PIXELS].numpy(), np.stack([r[keys.PIXELS] for r in rows]).transpose(0, 3, 1, 2))
+        np.testing.assert_array_equal(
+            item[keys.PIXELS].numpy(), np.stack([r[keys.PIXELS] for r in rows]).transpose(0, 3, 1, 2)
+        )
         assert item[keys.ACTION].shape == (num_steps, frameskip * 2)
 
 
@@ -148,8 +152,9 @@ def test_record_video_writes_one_playable_mp4_per_env(tmp_path):
 def test_record_video_from_dataset(tmp_path):
     world = make_world(1)
     world.record_dataset("toy", episodes=2, seed=0, cache_dir=tmp_path)
-    paths = world.record_video_from_dataset(tmp_path / "v", "toy", [0, 1], cache_dir=tmp_path,
-                                            viewname=[keys.PIXELS, keys.GOAL])
+    paths = world.record_video_from_dataset(
+        tmp_path / "v", "toy", [0, 1], cache_dir=tmp_path, viewname=[keys.PIXELS, keys.GOAL]
+    )
     assert [p.name for p in paths] == ["episode_0.mp4", "episode_1.mp4"]
     import imageio.v3 as iio
 
@@ -163,8 +168,9 @@ def test_evaluate_from_dataset(tmp_path):
     world.set_policy(ToyExpert())
     world.record_dataset("toy", episodes=2, seed=3, cache_dir=tmp_path)
     ds = HDF5Dataset("toy", cache_dir=tmp_path)
-    out = world.evaluate_from_dataset(ds, [0, 1], [0, 1], goal_offset_steps=3, eval_budget=10,
-                                      save_video=True, video_path=tmp_path / "ev")
+    out = world.evaluate_from_dataset(
+        ds, [0, 1], [0, 1], goal_offset_steps=3, eval_budget=10, save_video=True, video_path=tmp_path / "ev"
+    )
     assert out["success_rate"] == 100.0
     assert out["episode_successes"].tolist() == [True, True]
     assert (tmp_path / "ev" / "env_0.mp4").is_file()
@@ -233,7 +239,7 @@ def _check_episodes(f):
     actions = f[keys.ACTION][: offsets[-1] + lengths[-1]]
     pixels = f[keys.PIXELS][: offsets[-1] + lengths[-1]]
     assert pixels.any()
-    for off, n in zip(offsets, lengths):
+    for off, n in zip(offsets, lengths, strict=False):
         assert steps[off : off + n].tolist() == list(range(n))
         assert np.isnan(actions[off + n - 1]).all() and not np.isnan(actions[off : off + n - 1]).any()
 
@@ -274,14 +280,18 @@ def test_evaluate_from_dataset_callables_read_their_arguments_from_the_start_row
         {"method": "no_such_method", "args": {}},
     ]
     with caplog.at_level("WARNING"):
-        world.evaluate_from_dataset(ds, [0, 1], [1, 2], goal_offset_steps=3, eval_budget=1, callables=callables, save_video=False)
+        world.evaluate_from_dataset(
+            ds, [0, 1], [1, 2], goal_offset_steps=3, eval_budget=1, callables=callables, save_video=False
+        )
     goals = world.envs.call("_goal_state")
     for i, (ep, step) in enumerate([(0, 1), (1, 2)]):
         np.testing.assert_allclose(goals[i], ds.get_row_data(int(ds.offsets[ep]) + step)[keys.STATE])
     assert "no method 'no_such_method'" in caplog.text
     literal = [0.0, 0.0, 100.0, 100.0, 0.5, 0.0, 0.0]
     callables = [{"method": "_set_goal_state", "args": {"goal_state": {"value": literal, "in_dataset": False}}}]
-    world.evaluate_from_dataset(ds, [0, 1], [1, 2], goal_offset_steps=3, eval_budget=1, callables=callables, save_video=False)
+    world.evaluate_from_dataset(
+        ds, [0, 1], [1, 2], goal_offset_steps=3, eval_budget=1, callables=callables, save_video=False
+    )
     np.testing.assert_allclose(world.envs.call("_goal_state")[1], literal)
 
 

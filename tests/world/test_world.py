@@ -126,7 +126,7 @@ def test_determinism_same_seed_same_infos():
             out.append({k: v.copy() for k, v in world.infos.items() if k != keys.RENDER_TIME})
         return out
 
-    for x, y in zip(run(), run()):
+    for x, y in zip(run(), run(), strict=False):
         assert x.keys() == y.keys()
         for k in x:
             np.testing.assert_array_equal(x[k], y[k])
@@ -147,7 +147,7 @@ def test_sync_and_async_give_identical_infos():
         world.close()
         return out
 
-    for x, y in zip(run("sync"), run("async")):
+    for x, y in zip(run("sync"), run("async"), strict=False):
         assert x.keys() == y.keys()
         for k in x:
             if k != keys.RENDER_TIME:
@@ -329,9 +329,19 @@ def test_upstream_world_arguments_do_not_reach_the_env():
         calls.append(("extra", type(env).__name__))
         return env
 
-    world = swm.World(TOY, num_envs=1, image_shape=(8, 8), pre_wrappers=[pre], extra_wrappers=[extra],
-                      image_resample="nearest", vectorization_mode="sync", verbose=0)
-    assert [c[0] for c in calls] == ["pre", "extra"] and calls[1][1] == "MegaWrapper"  # extra wraps MegaWrapper, as 0.0.3
+    world = swm.World(
+        TOY,
+        num_envs=1,
+        image_shape=(8, 8),
+        pre_wrappers=[pre],
+        extra_wrappers=[extra],
+        image_resample="nearest",
+        vectorization_mode="sync",
+        verbose=0,
+    )
+    assert [c[0] for c in calls] == ["pre", "extra"] and calls[1][
+        1
+    ] == "MegaWrapper"  # extra wraps MegaWrapper, as 0.0.3
     world.set_policy(RandomPolicy(seed=0))
     world.reset(seed=0)
     bare = swm.World(TOY, num_envs=1, add_pixels=False, vectorization_mode="sync", verbose=0)

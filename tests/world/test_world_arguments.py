@@ -16,7 +16,9 @@ TOY = "swm/Toy-v0"
 
 
 def world(**kwargs):
-    w = swm.World(TOY, num_envs=2, image_shape=(16, 16), max_episode_steps=3, verbose=0, vectorization_mode="sync", **kwargs)
+    w = swm.World(
+        TOY, num_envs=2, image_shape=(16, 16), max_episode_steps=3, verbose=0, vectorization_mode="sync", **kwargs
+    )
     w.set_policy(RandomPolicy(seed=0))
     return w
 

@@ -11,9 +11,18 @@ import importlib
 from typing import Any
 
 DOMAINS = {
-    "Humanoid": "humanoid", "Cheetah": "cheetah", "Hopper": "hopper", "Reacher": "reacher", "Walker": "walker",
-    "Acrobot": "acrobot", "Pendulum": "pendulum", "Cartpole": "cartpole", "BallInCup": "ball_in_cup",
-    "Finger": "finger", "Manipulator": "manipulator", "Quadruped": "quadruped",
+    "Humanoid": "humanoid",
+    "Cheetah": "cheetah",
+    "Hopper": "hopper",
+    "Reacher": "reacher",
+    "Walker": "walker",
+    "Acrobot": "acrobot",
+    "Pendulum": "pendulum",
+    "Cartpole": "cartpole",
+    "BallInCup": "ball_in_cup",
+    "Finger": "finger",
+    "Manipulator": "manipulator",
+    "Quadruped": "quadruped",
 }
 _LAZY = {
     **{f"{name}DMControlWrapper": module for name, module in DOMAINS.items()},

@@ -65,8 +65,11 @@ class GeomOriginal(NamedTuple):
 
 def geom_originals(spec) -> dict[str, GeomOriginal]:
     """Each named geom as parsed, before any factor edits it."""
-    return {g.name: GeomOriginal(g.type, np.array(g.size, float), float(g.mass), np.array(g.pos, float))
-            for g in spec.geoms if g.name}
+    return {
+        g.name: GeomOriginal(g.type, np.array(g.size, float), float(g.mass), np.array(g.pos, float))
+        for g in spec.geoms
+        if g.name
+    }
 
 
 def strip_textures(spec) -> None:
@@ -79,7 +82,8 @@ def strip_textures(spec) -> None:
 
 def _array_fields(model) -> list[str]:
     return [
-        k for k in dir(model)
+        k
+        for k in dir(model)
         if not k.startswith("_") and not k.startswith(_SKIP_PREFIXES) and isinstance(getattr(model, k), np.ndarray)
     ]
 
@@ -147,8 +151,15 @@ def grid_texture(model, rgb: np.ndarray) -> tuple[slice, np.ndarray] | None:
     return slice(start, start + h * w * c), np.array(tiny.tex_data)
 
 
-def solve_ik(model, kinematics: Callable[[np.ndarray], Any], qpos: np.ndarray, index: list[int],
-             point: Callable[[Any], np.ndarray], target: np.ndarray, iters: int = 30) -> np.ndarray:
+def solve_ik(
+    model,
+    kinematics: Callable[[np.ndarray], Any],
+    qpos: np.ndarray,
+    index: list[int],
+    point: Callable[[Any], np.ndarray],
+    target: np.ndarray,
+    iters: int = 30,
+) -> np.ndarray:
     """``qpos`` with the hinge angles at ``index`` moved so that ``point(kinematics(q))`` reaches ``target``.
 
     Damped Gauss-Newton on a finite-difference Jacobian from several starts (``qpos``, then a

@@ -35,8 +35,9 @@ class AcrobotDMControlWrapper(DMControlWrapper):
     }
     GOAL_TOLERANCE = 0.2
 
-    def __init__(self, seed=None, environment_kwargs=None, render_mode=None, *, task="swingup_sparse",
-                 render_quality="medium"):
+    def __init__(
+        self, seed=None, environment_kwargs=None, render_mode=None, *, task="swingup_sparse", render_quality="medium"
+    ):
         super().__init__(task, seed, environment_kwargs, render_mode, render_quality)
 
     @classmethod

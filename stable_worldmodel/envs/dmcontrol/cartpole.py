@@ -36,8 +36,9 @@ class CartpoleDMControlWrapper(DMControlWrapper):
     }
     GOAL_TOLERANCE = 0.1
 
-    def __init__(self, seed=None, environment_kwargs=None, render_mode=None, *, task="swingup_sparse",
-                 render_quality="medium"):
+    def __init__(
+        self, seed=None, environment_kwargs=None, render_mode=None, *, task="swingup_sparse", render_quality="medium"
+    ):
         super().__init__(task, seed, environment_kwargs, render_mode, render_quality)
 
     @classmethod

@@ -45,6 +45,10 @@ class CheetahDMControlWrapper(LocomotionWrapper):
     def extra_info(self):
         p = self._physics
         xpos = p.named.data.xpos
-        return {"speed": float(p.speed()), "torso_height": float(xpos["torso", "z"]),
-                "bfoot_height": float(xpos["bfoot", "z"]), "ffoot_height": float(xpos["ffoot", "z"]),
-                "angmomentum": float(p.named.data.subtree_angmom["torso"][1])}
+        return {
+            "speed": float(p.speed()),
+            "torso_height": float(xpos["torso", "z"]),
+            "bfoot_height": float(xpos["bfoot", "z"]),
+            "ffoot_height": float(xpos["ffoot", "z"]),
+            "angmomentum": float(p.named.data.subtree_angmom["torso"][1]),
+        }

@@ -100,8 +100,14 @@ class DMControlWrapper(DatasetResetMixin, gym.Env):
     AGENT_JOINTS: tuple[str, ...] | None = None  # proprio joints (None: all)
     GOAL_TOLERANCE = 0.1  # eval_state: success when the goal features are this close
 
-    def __init__(self, task: str | None = None, seed: int | None = None, environment_kwargs: dict | None = None,
-                 render_mode: str | None = None, render_quality: str = "medium"):
+    def __init__(
+        self,
+        task: str | None = None,
+        seed: int | None = None,
+        environment_kwargs: dict | None = None,
+        render_mode: str | None = None,
+        render_quality: str = "medium",
+    ):
         owner = type(self).__name__
         task = self.DEFAULT_TASK if task is None else task
         if task not in self.TASKS:
@@ -235,7 +241,9 @@ class DMControlWrapper(DatasetResetMixin, gym.Env):
     def step(self, action):
         a = np.asarray(action, dtype=np.float64)
         if a.size != self.action_space.shape[0] or not np.all(np.isfinite(a)):
-            raise SpaceError(f"{type(self).__name__}.step requires {self.action_space.shape[0]} finite action values, got {action!r}")
+            raise SpaceError(
+                f"{type(self).__name__}.step requires {self.action_space.shape[0]} finite action values, got {action!r}"
+            )
         ctrl = self._ctrl_low + self._ctrl_scale * (np.clip(a.reshape(-1), -1.0, 1.0) + 1.0)
         reward, terminated, physics = 0.0, False, self._physics
         for _ in range(self.ACTION_REPEAT):
@@ -253,8 +261,11 @@ class DMControlWrapper(DatasetResetMixin, gym.Env):
 
     def render(self, width: int | None = None, height: int | None = None, camera_id: int | None = None) -> np.ndarray:
         """The current frame, ``(height, width, 3)`` uint8 (``render_size`` unless given), from ``camera_id``."""
-        h, w = self.render_size if width is None and height is None else check_render_size(
-            type(self).__name__, (height or self.render_size[0], width or self.render_size[1]))
+        h, w = (
+            self.render_size
+            if width is None and height is None
+            else check_render_size(type(self).__name__, (height or self.render_size[0], width or self.render_size[1]))
+        )
         cam = self.CAMERA_ID if camera_id is None else camera_id
         return self._renderer(h, w).render(self._physics.data.ptr, cam)
 
@@ -277,8 +288,10 @@ class DMControlWrapper(DatasetResetMixin, gym.Env):
         g = np.asarray(goal_state, float).reshape(-1)[:nq]
         c = np.asarray(cur_state, float).reshape(-1)[:nq]
         if g.shape[0] != nq or c.shape[0] != nq:
-            raise ConfigError(f"{type(self).__name__}.eval_state requires states of at least {nq} numbers (qpos first), "
-                              f"got {np.size(goal_state)} and {np.size(cur_state)}")
+            raise ConfigError(
+                f"{type(self).__name__}.eval_state requires states of at least {nq} numbers (qpos first), "
+                f"got {np.size(goal_state)} and {np.size(cur_state)}"
+            )
         dist = float(np.linalg.norm(self.goal_features(c) - self.goal_features(g)))
         return dist <= self.GOAL_TOLERANCE, dist
 
@@ -289,8 +302,9 @@ class DMControlWrapper(DatasetResetMixin, gym.Env):
         mujoco.mj_kinematics(self.model, d)
         return d
 
-    def solve_ik(self, qpos: np.ndarray, index: list[int], point: Callable[[mujoco.MjData], np.ndarray],
-                 target: np.ndarray) -> np.ndarray:
+    def solve_ik(
+        self, qpos: np.ndarray, index: list[int], point: Callable[[mujoco.MjData], np.ndarray], target: np.ndarray
+    ) -> np.ndarray:
         """``qpos`` with the hinge angles at ``index`` moved so that ``point(data)`` reaches ``target``
         (see :func:`._model.solve_ik`)."""
         return _model.solve_ik(self.model, self.kinematics, qpos, index, point, target)
@@ -299,8 +313,11 @@ class DMControlWrapper(DatasetResetMixin, gym.Env):
     def set_state(self, qpos: np.ndarray, qvel: np.ndarray) -> None:
         """Put the physics in configuration ``qpos`` with velocities ``qvel`` (time unchanged)."""
         nq, nv = self.model.nq, self.model.nv
-        self._set_full_state(np.concatenate([self._check_len(qpos, nq, "qpos"), self._check_len(qvel, nv, "qvel"),
-                                             self._physics.data.act]))
+        self._set_full_state(
+            np.concatenate(
+                [self._check_len(qpos, nq, "qpos"), self._check_len(qvel, nv, "qvel"), self._physics.data.act]
+            )
+        )
 
     def set_gravity(self, gravity: np.ndarray) -> None:
         """Set the gravity vector (x, y, z) until the next reset applies the ``gravity`` factors again."""
@@ -353,8 +370,10 @@ class DMControlWrapper(DatasetResetMixin, gym.Env):
         if arr.shape[0] == short and short != full:
             arr = np.concatenate([arr, self._physics.data.act if fill else np.zeros(m.na)])
         if arr.shape[0] != full or not np.all(np.isfinite(arr)):
-            raise ConfigError(f"{type(self).__name__} requires reset option {what!r} of {full} finite numbers "
-                              f"([qpos ({m.nq}), qvel ({m.nv}), act ({m.na})]), got shape {np.shape(value)}")
+            raise ConfigError(
+                f"{type(self).__name__} requires reset option {what!r} of {full} finite numbers "
+                f"([qpos ({m.nq}), qvel ({m.nv}), act ({m.na})]), got shape {np.shape(value)}"
+            )
         return arr
 
     def _set_full_state(self, state: np.ndarray) -> None:
@@ -385,8 +404,14 @@ class DMControlWrapper(DatasetResetMixin, gym.Env):
     def _info(self) -> dict[str, Any]:
         d, state = self._physics.data, self._state()
         success, _ = self.eval_state(self._goal, state)
-        info = {"env_name": self.env_name, "success": float(success), "qpos": d.qpos.copy(), "qvel": d.qvel.copy(),
-                "score": self._return / 1000.0, **self.extra_info()}
+        info = {
+            "env_name": self.env_name,
+            "success": float(success),
+            "qpos": d.qpos.copy(),
+            "qvel": d.qvel.copy(),
+            "score": self._return / 1000.0,
+            **self.extra_info(),
+        }
         info[keys.STATE], info[keys.PROPRIO] = state, self._proprio(state)
         info[keys.GOAL] = self._render_goal().copy()
         info[keys.GOAL_STATE], info[keys.GOAL_PROPRIO] = self._goal.copy(), self._proprio(self._goal)
@@ -400,8 +425,10 @@ def _check_env_kwargs(owner: str, kwargs: dict | None) -> dict[str, Any]:
     kwargs = dict(kwargs or {})
     for k, v in kwargs.items():
         if k not in ENV_KWARGS:
-            raise ConfigError(f"{owner} requires environment_kwargs keys among {list(ENV_KWARGS)}, got {k!r}."
-                              f"{did_you_mean(str(k), ENV_KWARGS)}")
+            raise ConfigError(
+                f"{owner} requires environment_kwargs keys among {list(ENV_KWARGS)}, got {k!r}."
+                f"{did_you_mean(str(k), ENV_KWARGS)}"
+            )
         if v is None or k == "flat_observation":  # observations are always flat
             continue
         ok = isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool) and v > 0

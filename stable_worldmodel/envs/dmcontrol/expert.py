@@ -41,8 +41,16 @@ from ...policy import BasePolicy
 from ...policy import ExpertPolicy as ScriptedExpert
 
 PENDULUM = {"inertia": 0.251, "mgl": 9.81 * 0.5, "pump": 5.0, "kp": 10.0, "kd": 2.0, "balance": 0.4}
-CARTPOLE = {"mgl": 0.1 * 9.81 * 0.5, "inertia": 0.1 / 3, "pump": 30.0, "kx": 0.5, "kv": 0.5, "balance": 0.5,
-            "q": (1.0, 10.0, 0.1, 0.1), "r": 1.0}
+CARTPOLE = {
+    "mgl": 0.1 * 9.81 * 0.5,
+    "inertia": 0.1 / 3,
+    "pump": 30.0,
+    "kx": 0.5,
+    "kv": 0.5,
+    "balance": 0.5,
+    "q": (1.0, 10.0, 0.1, 0.1),
+    "r": 1.0,
+}
 REACHER = {"kp": 5.0, "kd": 0.2}
 _GAINS: dict[str, np.ndarray] = {}
 
@@ -78,7 +86,9 @@ def reacher(state: np.ndarray, goal: np.ndarray) -> np.ndarray:
 
 
 CONTROLLERS: dict[str, Callable[[np.ndarray, np.ndarray], np.ndarray]] = {
-    "Pendulum": pendulum, "Cartpole": cartpole, "Reacher": reacher,
+    "Pendulum": pendulum,
+    "Cartpole": cartpole,
+    "Reacher": reacher,
 }
 
 
@@ -128,13 +138,15 @@ class DMControlExpert(ScriptedExpert):
     ``noise`` adds seeded Gaussian noise of that std before clipping to [-1, 1].
     """
 
-    def __init__(self, env_id: str = "swm/CartpoleDMControl-v0", noise: float = 0.0, seed: int | None = None,
-                 **kwargs: Any):
+    def __init__(
+        self, env_id: str = "swm/CartpoleDMControl-v0", noise: float = 0.0, seed: int | None = None, **kwargs: Any
+    ):
         match = re.fullmatch(r"swm/(\w+)DMControl-v0", str(env_id))
         name = match.group(1) if match else str(env_id)
         if name not in CONTROLLERS:
-            raise unknown_name("DMControl domain with a scripted expert", str(env_id),
-                               [f"swm/{n}DMControl-v0" for n in CONTROLLERS])
+            raise unknown_name(
+                "DMControl domain with a scripted expert", str(env_id), [f"swm/{n}DMControl-v0" for n in CONTROLLERS]
+            )
         if not np.isfinite(noise) or noise < 0:
             raise ConfigError(f"DMControlExpert requires noise >= 0, got {noise!r}")
         super().__init__(env_id=env_id, noise=float(noise), seed=seed, **kwargs)
@@ -166,8 +178,15 @@ class ExpertPolicy(BasePolicy):
     The pickle is loaded with ``pickle``: load only files you trust.
     """
 
-    def __init__(self, ckpt_path: str, vec_normalize_path: str, noise_std: float = 0.0, seed: int | None = None,
-                 device: str = "cpu", **kwargs: Any):
+    def __init__(
+        self,
+        ckpt_path: str,
+        vec_normalize_path: str,
+        noise_std: float = 0.0,
+        seed: int | None = None,
+        device: str = "cpu",
+        **kwargs: Any,
+    ):
         for what, path in (("ckpt_path", ckpt_path), ("vec_normalize_path", vec_normalize_path)):
             if not os.path.isfile(str(path)):
                 raise CheckpointNotFoundError(f"ExpertPolicy requires {what} to be an existing file, got {str(path)!r}")

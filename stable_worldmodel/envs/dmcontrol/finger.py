@@ -35,14 +35,17 @@ class FingerDMControlWrapper(DMControlWrapper):
     DEFAULT_TASK = "turn_hard"
     TASKS = {
         "spin": lambda r: finger.Spin(random=r),
-        **{name: (lambda radius: lambda r: finger.Turn(target_radius=radius, random=r))(radius)
-           for name, radius in TARGET_RADIUS.items()},
+        **{
+            name: lambda r, radius=radius: finger.Turn(target_radius=radius, random=r)
+            for name, radius in TARGET_RADIUS.items()
+        },
     }
     CONTROL_TIMESTEP = 0.02
     AGENT_JOINTS = ("proximal", "distal")
 
-    def __init__(self, task="turn_hard", seed=None, environment_kwargs=None, render_mode=None, *,
-                 render_quality="medium"):
+    def __init__(
+        self, task="turn_hard", seed=None, environment_kwargs=None, render_mode=None, *, render_quality="medium"
+    ):
         super().__init__(task, seed, environment_kwargs, render_mode, render_quality)
         self.GOAL_TOLERANCE = TARGET_RADIUS.get(self.task_name, 0.1)
 
@@ -78,8 +81,11 @@ class FingerDMControlWrapper(DMControlWrapper):
 
     def extra_info(self):
         p = self._physics
-        return {"hinge_velocity": float(p.hinge_velocity()), "target_position": p.target_position().copy(),
-                "tip_position": p.tip_position().copy()}
+        return {
+            "hinge_velocity": float(p.hinge_velocity()),
+            "target_position": p.target_position().copy(),
+            "tip_position": p.tip_position().copy(),
+        }
 
     @staticmethod
     def _tip(data):

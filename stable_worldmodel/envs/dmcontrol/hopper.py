@@ -23,8 +23,10 @@ class HopperDMControlWrapper(LocomotionWrapper):
     ENV_NAME = "Hopper"
     PHYSICS = hopper.Physics
     DEFAULT_TASK = "hop"
-    TASKS = {"stand": lambda r: hopper.Hopper(hopping=False, random=r),
-             "hop": lambda r: hopper.Hopper(hopping=True, random=r)}
+    TASKS = {
+        "stand": lambda r: hopper.Hopper(hopping=False, random=r),
+        "hop": lambda r: hopper.Hopper(hopping=True, random=r),
+    }
     CONTROL_TIMESTEP = 0.02
 
     def __init__(self, task="hop", seed=None, environment_kwargs=None, render_mode=None, *, render_quality="medium"):
@@ -44,5 +46,8 @@ class HopperDMControlWrapper(LocomotionWrapper):
 
     def extra_info(self):
         p = self._physics
-        return {"speed": float(p.speed()), "height": float(p.height()),
-                "angmomentum": float(p.named.data.subtree_angmom["torso"][1])}
+        return {
+            "speed": float(p.speed()),
+            "height": float(p.height()),
+            "angmomentum": float(p.named.data.subtree_angmom["torso"][1]),
+        }

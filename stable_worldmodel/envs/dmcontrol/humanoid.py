@@ -27,8 +27,10 @@ class HumanoidDMControlWrapper(LocomotionWrapper):
     ENV_NAME = "Humanoid"
     PHYSICS = humanoid.Physics
     DEFAULT_TASK = "walk"
-    TASKS = {name: (lambda v: lambda r: humanoid.Humanoid(move_speed=v, pure_state=False, random=r))(v)
-             for name, v in SPEEDS.items()}
+    TASKS = {
+        name: lambda r, v=v: humanoid.Humanoid(move_speed=v, pure_state=False, random=r)
+        for name, v in SPEEDS.items()
+    }
     CONTROL_TIMESTEP = 0.025
     HORIZONTAL_QPOS = (0, 1)
 
@@ -49,5 +51,8 @@ class HumanoidDMControlWrapper(LocomotionWrapper):
 
     def extra_info(self):
         p = self._physics
-        return {"speed": float(np.linalg.norm(p.center_of_mass_velocity()[:2])),
-                "torso_upright": float(p.torso_upright()), "head_height": float(p.head_height())}
+        return {
+            "speed": float(np.linalg.norm(p.center_of_mass_velocity()[:2])),
+            "torso_upright": float(p.torso_upright()),
+            "head_height": float(p.head_height()),
+        }

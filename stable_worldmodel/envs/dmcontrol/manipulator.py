@@ -55,8 +55,9 @@ class ManipulatorDMControlWrapper(DMControlWrapper):
             F.Factor("agent.upper_arm_length", F.density, F.NoEffect()),
             *F.floor_factors(),
             F.light_factor(),
-            *F.target_factors(F.MaterialRGB("target"), F.GeomShape("target_ball", radius=0.015),
-                              render=F.MaterialAlpha("target")),
+            *F.target_factors(
+                F.MaterialRGB("target"), F.GeomShape("target_ball", radius=0.015), render=F.MaterialAlpha("target")
+            ),
         )
 
     def goal_qpos(self):

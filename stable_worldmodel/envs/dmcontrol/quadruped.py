@@ -30,7 +30,7 @@ class QuadrupedDMControlWrapper(LocomotionWrapper):
     ENV_NAME = "Quadruped"
     PHYSICS = quadruped.Physics
     DEFAULT_TASK = "walk"
-    TASKS = {name: (lambda v: lambda r: quadruped.Move(desired_speed=v, random=r))(v) for name, v in SPEEDS.items()}
+    TASKS = {name: lambda r, v=v: quadruped.Move(desired_speed=v, random=r) for name, v in SPEEDS.items()}
     CONTROL_TIMESTEP = 0.02
     CAMERA_ID = 2
     HORIZONTAL_QPOS = (0, 1)

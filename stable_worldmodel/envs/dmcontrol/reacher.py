@@ -31,8 +31,10 @@ class ReacherDMControlWrapper(DMControlWrapper):
     ENV_NAME = "Reacher"
     PHYSICS = reacher.Physics
     DEFAULT_TASK = "hard"
-    TASKS = {name: (lambda size: lambda r: reacher.Reacher(target_size=size, random=r))(size)
-             for name, size in TARGET_SIZE.items()}
+    TASKS = {
+        name: lambda r, size=size: reacher.Reacher(target_size=size, random=r)
+        for name, size in TARGET_SIZE.items()
+    }
 
     def __init__(self, task="hard", seed=None, environment_kwargs=None, render_mode=None, *, render_quality="medium"):
         super().__init__(task, seed, environment_kwargs, render_mode, render_quality)
@@ -47,8 +49,11 @@ class ReacherDMControlWrapper(DMControlWrapper):
             F.Factor("agent.finger_locked", F.switch, F.NoEffect()),
             *F.floor_factors(),
             F.light_factor(),
-            *F.target_factors(F.MaterialRGB("target"), F.GeomShape("target", radius=TARGET_SIZE.get(task)),
-                              render=F.MaterialAlpha("target")),
+            *F.target_factors(
+                F.MaterialRGB("target"),
+                F.GeomShape("target", radius=TARGET_SIZE.get(task)),
+                render=F.MaterialAlpha("target"),
+            ),
         )
 
     def goal_qpos(self):

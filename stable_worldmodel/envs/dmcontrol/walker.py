@@ -30,7 +30,7 @@ class WalkerDMControlWrapper(LocomotionWrapper):
     ENV_NAME = "Walker"
     PHYSICS = walker.Physics
     DEFAULT_TASK = "walk"
-    TASKS = {name: (lambda v: lambda r: walker.PlanarWalker(move_speed=v, random=r))(v) for name, v in SPEEDS.items()}
+    TASKS = {name: lambda r, v=v: walker.PlanarWalker(move_speed=v, random=r) for name, v in SPEEDS.items()}
     CONTROL_TIMESTEP = 0.025
     HORIZONTAL_QPOS = (1,)  # walker's qpos: rootz, rootx, rooty, ...
 
@@ -52,6 +52,12 @@ class WalkerDMControlWrapper(LocomotionWrapper):
     def extra_info(self):
         p = self._physics
         xpos = p.named.data.xpos
-        return {"speed": float(p.horizontal_velocity()), "torso_height": float(p.torso_height()),
-                "torso_upright": float(p.torso_upright()),
-                **{f"{part}_height": float(xpos[part, "z"]) for part in ("left_foot", "right_foot", "left_thigh", "right_thigh")}}
+        return {
+            "speed": float(p.horizontal_velocity()),
+            "torso_height": float(p.torso_height()),
+            "torso_upright": float(p.torso_upright()),
+            **{
+                f"{part}_height": float(xpos[part, "z"])
+                for part in ("left_foot", "right_foot", "left_thigh", "right_thigh")
+            },
+        }

@@ -204,6 +204,6 @@ class ImagePositioningEnv(DatasetResetMixin, gym.Env):
         img = utils.new_canvas(self.render_size, v["background"]["color"])
         sprites = make_sprites(int(v["images"]["seed"]), self.n_images)
         side = float(v["images"]["size"])
-        for sprite, (x, y, a) in zip(sprites, np.asarray(state, np.float64).reshape(-1, 3)):
+        for sprite, (x, y, a) in zip(sprites, np.asarray(state, np.float64).reshape(-1, 3), strict=False):
             draw_sprite(img, sprite, np.array([x, y]), float(a), side)
         return img

@@ -36,7 +36,7 @@ class ImagePositioningExpert(ExpertPolicy):
         b = cur.shape[0]
         pos_step, ang_step = (
             np.asarray(infos[k], np.float64)[:, -1].reshape(b, 1) if k in infos else np.full((b, 1), default)
-            for k, default in zip(_STEP_KEYS, (MAX_POSITION_STEP, MAX_ANGLE_STEP))
+            for k, default in zip(_STEP_KEYS, (MAX_POSITION_STEP, MAX_ANGLE_STEP), strict=False)
         )
         err = (goal - cur).reshape(b, -1, 3)
         err[..., :2] /= pos_step[:, :, None]

@@ -69,7 +69,6 @@ def make_sprites(seed: int, n: int) -> tuple[Sprite, ...]:
     return tuple(_sprite(rng) for _ in range(n))
 
 
-
 def draw_sprite(img: np.ndarray, sprite: Sprite, center: np.ndarray, angle: float, side: float) -> None:
     """Draw ``sprite`` into ``img`` (H, W, 3) with its centre at ``center`` (canvas units in [0, 1]).
 
@@ -78,5 +77,5 @@ def draw_sprite(img: np.ndarray, sprite: Sprite, center: np.ndarray, angle: floa
     """
     points, splits, colors = sprite.packed
     px = utils.world_to_pixels(utils.rotate(points * side, angle) + center, 1.0, img.shape[:2])
-    for poly, color in zip(np.split(px, splits), colors):
+    for poly, color in zip(np.split(px, splits), colors, strict=False):
         utils.fill_polygon(img, poly, color)

@@ -112,8 +112,13 @@ class CubeEnv(ManipMixin, _OGBCubeEnv):
         self._setup(multiview, render_quality, render_mode)
         n = self._num_cubes
         rows = (np.arange(n) - (n - 1) / 2) * ROW_STEP
-        cube = cube_space(n, self._cube_colors, *CUBE_BOUNDS, np.stack([np.full(n, START_X), rows], 1),
-                          np.stack([np.full(n, GOAL_X), rows], 1))
+        cube = cube_space(
+            n,
+            self._cube_colors,
+            *CUBE_BOUNDS,
+            np.stack([np.full(n, START_X), rows], 1),
+            np.stack([np.full(n, GOAL_X), rows], 1),
+        )
         self.variation_space = common_space(cube, ARM_BOUNDS, camera_limit=10.0, light=0.7)
 
     def _state_ob_dim(self) -> int:

@@ -65,8 +65,10 @@ class OGBenchExpert(ExpertPolicy):
         self.min_norm = float(min_norm)
         self.rng = np.random.default_rng(seed)
         self._plans: list[dict[str, Any]] = []
-        markov = {name: require(f"{_ORACLES}.{name}_markov", extra="mujoco", purpose="OGBenchExpert") for name in
-                  ("cube", "button", "drawer", "window")}
+        markov = {
+            name: require(f"{_ORACLES}.{name}_markov", extra="mujoco", purpose="OGBenchExpert")
+            for name in ("cube", "button", "drawer", "window")
+        }
         self._oracle_cls = {
             "cube": markov["cube"].CubeMarkovOracle,
             "button": markov["button"].ButtonMarkovOracle,
@@ -119,8 +121,12 @@ class OGBenchExpert(ExpertPolicy):
         pos = np.array([info[f"privileged/block_{i}_pos"] for i in range(n)])
         target = np.array([info[f"privileged/target_block_{i}_pos"] for i in range(n)])
         todo = [i for i in range(n) if np.linalg.norm(pos[i] - target[i]) > SUCCESS_DISTANCE]
-        covered = {i for i in todo for j in range(n)
-                   if j != i and pos[j, 2] > pos[i, 2] + COVER_Z and np.linalg.norm(pos[j, :2] - pos[i, :2]) < COVER_XY}
+        covered = {
+            i
+            for i in todo
+            for j in range(n)
+            if j != i and pos[j, 2] > pos[i, 2] + COVER_Z and np.linalg.norm(pos[j, :2] - pos[i, :2]) < COVER_XY
+        }
         free = [i for i in todo if i not in covered] or todo
         return ("cube", min(free, key=lambda i: (target[i, 2], i))) if free else None
 

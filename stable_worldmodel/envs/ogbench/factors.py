@@ -66,7 +66,10 @@ class PointsBox(spaces.Box):
         super().__init__(
             np.broadcast_to(np.asarray(low, np.float64), init.shape).copy(),
             np.broadcast_to(np.asarray(high, np.float64), init.shape).copy(),
-            shape=init.shape, dtype=np.float64, init_value=init, constrain_fn=self._all_ok,
+            shape=init.shape,
+            dtype=np.float64,
+            init_value=init,
+            constrain_fn=self._all_ok,
         )
 
     def _all_ok(self, points) -> bool:

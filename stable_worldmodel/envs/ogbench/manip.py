@@ -59,11 +59,17 @@ _MESH_MODELS: dict[tuple, Any] = {}  # their decimated twins for drawing, per co
 def proprio_vector(ob_info: Mapping[str, np.ndarray]) -> np.ndarray:
     """OGBench's 19 proprioceptive observation numbers from ``compute_ob_info()``."""
     yaw = ob_info["proprio/effector_yaw"]
-    return np.concatenate([
-        ob_info["proprio/joint_pos"], ob_info["proprio/joint_vel"],
-        (ob_info["proprio/effector_pos"] - XYZ_CENTER) * XYZ_SCALE, np.cos(yaw), np.sin(yaw),
-        ob_info["proprio/gripper_opening"] * GRIPPER_SCALE, ob_info["proprio/gripper_contact"],
-    ])
+    return np.concatenate(
+        [
+            ob_info["proprio/joint_pos"],
+            ob_info["proprio/joint_vel"],
+            (ob_info["proprio/effector_pos"] - XYZ_CENTER) * XYZ_SCALE,
+            np.cos(yaw),
+            np.sin(yaw),
+            ob_info["proprio/gripper_opening"] * GRIPPER_SCALE,
+            ob_info["proprio/gripper_contact"],
+        ]
+    )
 
 
 def yaw_quat(yaw: float) -> np.ndarray:
@@ -146,8 +152,13 @@ class ManipMixin(DatasetResetMixin):
         self._dirty = False
 
     def _model_key(self) -> tuple:
-        return (type(self).__module__, type(self).__qualname__, self._env_type, self._ob_type,
-                self._pixel_transparent_arm)
+        return (
+            type(self).__module__,
+            type(self).__qualname__,
+            self._env_type,
+            self._ob_type,
+            self._pixel_transparent_arm,
+        )
 
     def _mesh_model(self):
         """The model whose (decimated) meshes the renderer draws, or None for the exact ones
@@ -159,16 +170,21 @@ class ManipMixin(DatasetResetMixin):
         if key not in _MESH_MODELS:
             mj = self._mjcf_model
             _MESH_MODELS[key] = meshes.render_mesh_model(
-                _MODELS[self._model_key()], mjcf_utils.to_string(mj), mjcf_utils.get_assets(mj), ratio,
-                plane_grid=grid)
+                _MODELS[self._model_key()], mjcf_utils.to_string(mj), mjcf_utils.get_assets(mj), ratio, plane_grid=grid
+            )
         return _MESH_MODELS[key]
 
     def _floor_geoms(self) -> list[int]:
         """The ground planes (static, facing up): nothing lies below them, so below ``"high"`` they
         are left out of the shadow map (they could only shadow themselves)."""
         m = self._model
-        return [g for g in range(m.ngeom) if m.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE
-                and m.geom_bodyid[g] == 0 and self._data.geom_xmat[g, 8] > 0.999]
+        return [
+            g
+            for g in range(m.ngeom)
+            if m.geom_type[g] == mujoco.mjtGeom.mjGEOM_PLANE
+            and m.geom_bodyid[g] == 0
+            and self._data.geom_xmat[g, 8] > 0.999
+        ]
 
     def post_compilation_objects(self) -> None:
         super().post_compilation_objects()
@@ -360,15 +376,17 @@ class ManipMixin(DatasetResetMixin):
         ob_info = self.compute_ob_info()
         info = infokeys.to_ours(ob_info)  # proprio/joint_pos -> proprio.joint_pos (see .infokeys)
         goal = self._goal
-        info.update({
-            "env_name": self.env_name,
-            "target": np.array(goal["ob"], copy=True),
-            keys.STATE: self._state_vector(),
-            keys.PROPRIO: proprio_vector(ob_info),
-            keys.GOAL: goal["image"].copy(),
-            keys.GOAL_STATE: goal[keys.STATE].copy(),
-            keys.GOAL_PROPRIO: goal[keys.PROPRIO].copy(),
-        })
+        info.update(
+            {
+                "env_name": self.env_name,
+                "target": np.array(goal["ob"], copy=True),
+                keys.STATE: self._state_vector(),
+                keys.PROPRIO: proprio_vector(ob_info),
+                keys.GOAL: goal["image"].copy(),
+                keys.GOAL_STATE: goal[keys.STATE].copy(),
+                keys.GOAL_PROPRIO: goal[keys.PROPRIO].copy(),
+            }
+        )
         return info
 
     def get_reset_info(self) -> dict[str, Any]:
@@ -412,9 +430,14 @@ class ManipMixin(DatasetResetMixin):
         if self._model is None:
             raise ConfigError(f"{type(self).__name__} requires reset() before rendering")
         self._close_renderer()
-        self._mjr = MjRenderer(self._model, self._render_height, self._render_width, self.render_quality,
-                               mesh_model=self._mesh_model(),
-                               shadowless=self._floor_geoms() if self.render_quality != "high" else ())
+        self._mjr = MjRenderer(
+            self._model,
+            self._render_height,
+            self._render_width,
+            self.render_quality,
+            mesh_model=self._mesh_model(),
+            shadowless=self._floor_geoms() if self.render_quality != "high" else (),
+        )
 
     def render(self, camera: str | None = None) -> np.ndarray:
         """The ``(H, W, 3)`` uint8 frame from ``camera`` (default ``front_pixels``, as upstream)."""

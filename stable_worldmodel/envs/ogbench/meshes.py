@@ -125,8 +125,9 @@ def available() -> bool:
     return False
 
 
-def render_mesh_model(model, xml: str, assets: dict[str, bytes], ratio: float, cache_dir=None,
-                      plane_grid: float | None = None):
+def render_mesh_model(
+    model, xml: str, assets: dict[str, bytes], ratio: float, cache_dir=None, plane_grid: float | None = None
+):
     """``model``'s description (``xml``, ``assets``) compiled with decimated large meshes.
 
     Each mesh of ``model`` with at least :data:`MIN_FACES` faces is decimated in ``model``'s own
@@ -138,7 +139,9 @@ def render_mesh_model(model, xml: str, assets: dict[str, bytes], ratio: float, c
     import mujoco
 
     ratio = check_ratio(ratio)
-    if plane_grid is not None and (isinstance(plane_grid, bool) or not isinstance(plane_grid, (int, float)) or not plane_grid > 0):
+    if plane_grid is not None and (
+        isinstance(plane_grid, bool) or not isinstance(plane_grid, (int, float)) or not plane_grid > 0
+    ):
         raise ConfigError(f"render_mesh_model requires plane_grid > 0 (metres) or None, got {plane_grid!r}")
     spec = mujoco.MjSpec.from_string(xml, assets=assets)
     lighter = []
@@ -148,8 +151,9 @@ def render_mesh_model(model, xml: str, assets: dict[str, bytes], ratio: float, c
             continue
         mesh = spec.mesh(model.mesh(i).name)
         v0, f0 = int(model.mesh_vertadr[i]), int(model.mesh_faceadr[i])
-        verts, faces = decimate(model.mesh_vert[v0 : v0 + model.mesh_vertnum[i]],
-                                model.mesh_face[f0 : f0 + nface], ratio, cache_dir)
+        verts, faces = decimate(
+            model.mesh_vert[v0 : v0 + model.mesh_vertnum[i]], model.mesh_face[f0 : f0 + nface], ratio, cache_dir
+        )
         mesh.file, mesh.scale = "", [1.0, 1.0, 1.0]
         mesh.refpos, mesh.refquat = [0.0, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0]
         mesh.uservert, mesh.userface = verts.reshape(-1).tolist(), faces.reshape(-1).tolist()

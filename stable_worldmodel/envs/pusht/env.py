@@ -122,7 +122,9 @@ class PushT(DatasetResetMixin, PushTPhysics, gym.Env):
         pos, vel = (-WINDOW, 2 * WINDOW), (-MAX_SPEED, MAX_SPEED)  # generous: the agent may overshoot the table
         self.observation_space = gym.spaces.Dict(
             {
-                keys.PROPRIO: box(np.array([pos[0]] * 2 + [vel[0]] * 2), np.array([pos[1]] * 2 + [vel[1]] * 2), dtype=np.float64),
+                keys.PROPRIO: box(
+                    np.array([pos[0]] * 2 + [vel[0]] * 2), np.array([pos[1]] * 2 + [vel[1]] * 2), dtype=np.float64
+                ),
                 keys.STATE: box(
                     np.array([pos[0]] * 4 + [0.0] + [vel[0]] * 2),
                     np.array([pos[1]] * 4 + [2 * np.pi] + [vel[1]] * 2),

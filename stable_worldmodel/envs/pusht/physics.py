@@ -54,7 +54,9 @@ class PushTPhysics:
         self.space = space
 
     # -- bodies (the method names of seed 000) ---------------------------------------------
-    def add_shape(self, name: str, position, angle: float = 0.0, scale: float | None = None, *, kinematic: bool = False):
+    def add_shape(
+        self, name: str, position, angle: float = 0.0, scale: float | None = None, *, kinematic: bool = False
+    ):
         """Add a body of shape ``name`` (one of :data:`SHAPES`) at ``position`` / ``angle``.
 
         ``scale`` is the unit length of :mod:`.shapes` (30 by default; a circle's radius, 15 by
@@ -187,5 +189,15 @@ def body_state(agent, block) -> np.ndarray:
 
 
 __all__ = [
-    "CONTROL_HZ", "K_P", "K_V", "SHAPES", "SIM_HZ", "WINDOW", "PushTPhysics", "body_state", "on_post_solve", "pd_gains", "set_pose",
+    "CONTROL_HZ",
+    "K_P",
+    "K_V",
+    "SHAPES",
+    "SIM_HZ",
+    "WINDOW",
+    "PushTPhysics",
+    "body_state",
+    "on_post_solve",
+    "pd_gains",
+    "set_pose",
 ]

@@ -32,9 +32,11 @@ def convex_hull(points: np.ndarray) -> np.ndarray:
     def half(seq):
         out: list = []
         for p in seq:
-            while len(out) >= 2 and (out[-1][0] - out[-2][0]) * (p[1] - out[-2][1]) - (out[-1][1] - out[-2][1]) * (
-                p[0] - out[-2][0]
-            ) <= 0:
+            while (
+                len(out) >= 2
+                and (out[-1][0] - out[-2][0]) * (p[1] - out[-2][1]) - (out[-1][1] - out[-2][1]) * (p[0] - out[-2][0])
+                <= 0
+            ):
                 out.pop()
             out.append(p)
         return out
@@ -124,7 +126,7 @@ def _outline_samples(spec: ShapeSpec) -> tuple[np.ndarray, np.ndarray]:
         return spec.radius * n, n
     poly = spec.outline
     pts, nrm = [], []
-    for a, b in zip(poly, np.roll(poly, -1, axis=0)):
+    for a, b in zip(poly, np.roll(poly, -1, axis=0), strict=False):
         e = b - a
         length = float(np.linalg.norm(e))
         n = np.array([e[1], -e[0]]) / length
@@ -144,7 +146,9 @@ def contact_plan(spec: ShapeSpec, agent_radius: float) -> ContactPlan:
     hull = convex_hull(spec.outline)
     obstacle = Obstacle(hull, agent_radius + NAV_MARGIN)
     touch = p + n * agent_radius
-    ok = (distance_to_shape(spec, pre) > agent_radius + PRE_MARGIN - 0.5) & (distance_to_shape(spec, touch) > agent_radius - 0.5)
+    ok = (distance_to_shape(spec, pre) > agent_radius + PRE_MARGIN - 0.5) & (
+        distance_to_shape(spec, touch) > agent_radius - 0.5
+    )
     ok &= obstacle.depth(pre) > 0.5
     p, n, pre = p[ok], n[ok], pre[ok]
     d = -n

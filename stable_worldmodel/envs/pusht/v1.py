@@ -137,7 +137,9 @@ class PushTV1(PushT):
         init_value: dict | None = None,
         action_scale: float = 100,
     ):
-        super().__init__(render_mode=render_mode, render_size=render_size, action_scale=action_scale, resolution=resolution)
+        super().__init__(
+            render_mode=render_mode, render_size=render_size, action_scale=action_scale, resolution=resolution
+        )
         self.action_scale = action_scale  # kept as given: upstream forms action * 100 in the action's dtype
         self.with_target, self.relative = bool(with_target), bool(relative)
         self.block_cog, self.damping = block_cog, damping
@@ -149,7 +151,9 @@ class PushTV1(PushT):
             {
                 keys.PROPRIO: gym.spaces.Box(-inf, inf, (4,), np.float64),
                 keys.STATE: gym.spaces.Box(
-                    np.array([-inf] * 4 + [0.0] + [-inf] * 2), np.array([inf] * 4 + [two_pi] + [inf] * 2), dtype=np.float64
+                    np.array([-inf] * 4 + [0.0] + [-inf] * 2),
+                    np.array([inf] * 4 + [two_pi] + [inf] * 2),
+                    dtype=np.float64,
                 ),
             }
         )
@@ -196,7 +200,12 @@ class PushTV1(PushT):
             start = _state_option(options[keys.STATE], keys.STATE)
         else:
             start = np.array(
-                [*v["agent"]["start_position"], *v["block"]["start_position"], v["block"]["angle"], *v["agent"]["velocity"]],
+                [
+                    *v["agent"]["start_position"],
+                    *v["block"]["start_position"],
+                    v["block"]["angle"],
+                    *v["agent"]["velocity"],
+                ],
                 np.float64,
             )
         self._put(start)
@@ -207,7 +216,9 @@ class PushTV1(PushT):
         a = np.asarray(action)
         if a.shape != (2,) or not np.all(np.isfinite(a)):
             raise ConfigError(f"{type(self).__name__} requires a finite action of shape (2,), got {action!r}")
-        move = a * self.action_scale if np.issubdtype(a.dtype, np.floating) else a.astype(np.float64) * self.action_scale
+        move = (
+            a * self.action_scale if np.issubdtype(a.dtype, np.floating) else a.astype(np.float64) * self.action_scale
+        )
         # Scalars keep the action's dtype, as upstream's Vec2d arithmetic does (float32 actions
         # make the whole PD update float32 under NumPy 2's promotion rules).
         if self.relative:
@@ -220,7 +231,10 @@ class PushTV1(PushT):
         for _ in range(_SUBSTEPS):
             px, py = agent.position
             vx, vy = agent.velocity
-            agent.velocity = (vx + (K_P * (tx - px) + K_V * (0.0 - vx)) * _DT, vy + (K_P * (ty - py) + K_V * (0.0 - vy)) * _DT)
+            agent.velocity = (
+                vx + (K_P * (tx - px) + K_V * (0.0 - vx)) * _DT,
+                vy + (K_P * (ty - py) + K_V * (0.0 - vy)) * _DT,
+            )
             step(_DT)
         self._n_contacts = -(-self._contact_points // _SUBSTEPS)
         self._state = body_state(self.agent, self.block)
@@ -291,7 +305,9 @@ class PushTDiscreteV1(PushTV1):
 
     def __init__(self, quantizer: Any = None, **kwargs: Any):
         if quantizer is not None:
-            raise ConfigError(f"PushTDiscreteV1 has upstream's fixed 16x16 polar grid; got a custom quantizer {quantizer!r}")
+            raise ConfigError(
+                f"PushTDiscreteV1 has upstream's fixed 16x16 polar grid; got a custom quantizer {quantizer!r}"
+            )
         super().__init__(**kwargs)
         self.action_space = gym.spaces.MultiDiscrete([N_RADIAL, N_ANGULAR])
 
@@ -305,7 +321,12 @@ class PushTDiscreteV1(PushTV1):
 
     def step(self, action):
         a = np.asarray(action).reshape(-1)
-        if a.shape != (2,) or not np.issubdtype(a.dtype, np.integer) or a.min() < 0 or a[0] >= N_RADIAL or a[1] >= N_ANGULAR:
+        if (
+            a.shape != (2,)
+            or not np.issubdtype(a.dtype, np.integer)
+            or a.min() < 0
+            or a[0] >= N_RADIAL
+            or a[1] >= N_ANGULAR
+        ):
             raise ConfigError(f"PushTDiscreteV1 requires an action of 2 integers in [0, 15], got {action!r}")
         return super().step(dequantize(a))
-

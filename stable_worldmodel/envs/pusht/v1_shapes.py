@@ -31,7 +31,6 @@ CIRCLE_RADIUS = 0.375  # x scale
 TEE_SCALE = 30.0  # upstream's T ignores the scale factor
 
 
-
 def _rect(x0: float, y0: float, x1: float, y1: float) -> list[tuple[float, float]]:
     return [(x0, y1), (x1, y1), (x1, y0), (x0, y0)]
 

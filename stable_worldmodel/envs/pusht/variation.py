@@ -115,6 +115,8 @@ def draw_seeded(variation_space, given: set[str], agent: ShapeSpec, block: Shape
     for _ in range(100):
         for name in todo:
             values[name] = _uniform(leaves[name], rng)
-        if _clear(agent, values["agent.start_position"], block, values["block.start_position"], float(values["block.angle"])):
+        if _clear(
+            agent, values["agent.start_position"], block, values["block.start_position"], float(values["block.angle"])
+        ):
             break
     variation_space.set_value({name: values[name] for name in todo})

@@ -24,8 +24,14 @@ class WeakPolicy(BasePolicy):
     """Random moves constrained to stay within ``dist_constraint`` (world units) of the block."""
 
     def __init__(self, dist_constraint: float = 100, seed: int | None = None, **kwargs: Any):
-        if isinstance(dist_constraint, bool) or not isinstance(dist_constraint, (int, float, np.number)) or not dist_constraint > 0:
-            raise ConfigError(f"WeakPolicy requires dist_constraint to be a positive number (world units), got {dist_constraint!r}")
+        if (
+            isinstance(dist_constraint, bool)
+            or not isinstance(dist_constraint, (int, float, np.number))
+            or not dist_constraint > 0
+        ):
+            raise ConfigError(
+                f"WeakPolicy requires dist_constraint to be a positive number (world units), got {dist_constraint!r}"
+            )
         super().__init__(**kwargs)
         self.type = "weak"
         self.dist_constraint = float(dist_constraint)

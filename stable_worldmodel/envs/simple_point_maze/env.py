@@ -26,8 +26,6 @@ World: a 7 x 7 grid of unit cells (x right, y down; cell ``(i, j)`` is row ``i``
 
 from __future__ import annotations
 
-from typing import Any
-
 import gymnasium as gym
 import numpy as np
 
@@ -66,7 +64,11 @@ def make_variation_space() -> spaces.Dict:
             "wall": spaces.Dict({"color": _rgb(60, 60, 90)}),
             "floor": spaces.Dict({"color": _rgb(235, 230, 215)}),
             "agent": spaces.Dict(
-                {"color": _rgb(220, 40, 40), "radius": _scalar(*RADIUS_RANGE, 0.2), "position": _point((1.5, 1.5), size)}
+                {
+                    "color": _rgb(220, 40, 40),
+                    "radius": _scalar(*RADIUS_RANGE, 0.2),
+                    "position": _point((1.5, 1.5), size),
+                }
             ),
             "goal": spaces.Dict(
                 {"color": _rgb(40, 170, 60), "radius": _scalar(0.15, 0.4, 0.25), "position": _point((5.5, 5.5), size)}

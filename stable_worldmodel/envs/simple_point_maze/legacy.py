@@ -69,7 +69,9 @@ class SimplePointMazeV0Env(DatasetResetMixin, gym.Env):
         if render_mode not in (None, "rgb_array"):
             raise ConfigError(f"SimplePointMazeV0Env requires render_mode 'rgb_array' or None, got {render_mode!r}")
         if not 1 <= min_walls <= max_walls:
-            raise ConfigError(f"SimplePointMazeV0Env requires 1 <= min_walls <= max_walls, got {min_walls}, {max_walls}")
+            raise ConfigError(
+                f"SimplePointMazeV0Env requires 1 <= min_walls <= max_walls, got {min_walls}, {max_walls}"
+            )
         self.render_mode = render_mode
         self.show_goal = bool(show_goal)
         self.width, self.height = WIDTH, HEIGHT
@@ -106,9 +108,14 @@ class SimplePointMazeV0Env(DatasetResetMixin, gym.Env):
             return spaces.Box(low, high, shape=(), dtype=np.float32, init_value=np.array(init, np.float32))
 
         def position(init, entity):
-            return spaces.Box(np.zeros(2, np.float32), corner, shape=(2,), dtype=np.float32,
-                              init_value=np.array(init, np.float32),
-                              constrain_fn=lambda v: not self._collides(v, entity=entity))
+            return spaces.Box(
+                np.zeros(2, np.float32),
+                corner,
+                shape=(2,),
+                dtype=np.float32,
+                init_value=np.array(init, np.float32),
+                constrain_fn=lambda v: not self._collides(v, entity=entity),
+            )
 
         # Keys in alphabetical order, as Gymnasium sorts 0.1.1's plain dicts: the per-key seeds
         # (and the sampling order where none is given) follow this order. Each Dict re-checks its
@@ -116,25 +123,41 @@ class SimplePointMazeV0Env(DatasetResetMixin, gym.Env):
         walls = {
             "color": rgb([0, 0, 0]),
             "number": spaces.Discrete(n - min_walls + 1, start=min_walls, init_value=min(5, n)),
-            "positions": spaces.Box(np.zeros((n, 2), np.float32), np.tile(corner, (n, 1)), shape=(n, 2),
-                                    dtype=np.float32, init_value=init_positions, constrain_fn=self._check_walls),
+            "positions": spaces.Box(
+                np.zeros((n, 2), np.float32),
+                np.tile(corner, (n, 1)),
+                shape=(n, 2),
+                dtype=np.float32,
+                init_value=init_positions,
+                constrain_fn=self._check_walls,
+            ),
             "shape": spaces.Box(size_low, size_high, shape=(n, 2), dtype=np.float32, init_value=init_shape),
         }
         return spaces.Dict(
             {
                 "agent": spaces.Dict(
-                    {"color": rgb([255, 0, 0]), "position": position([0.5, 0.5], "agent"),
-                     "radius": scalar(0.05, 0.5, 0.1), "speed": scalar(0.05, 2, 1.0)},
+                    {
+                        "color": rgb([255, 0, 0]),
+                        "position": position([0.5, 0.5], "agent"),
+                        "radius": scalar(0.05, 0.5, 0.1),
+                        "speed": scalar(0.05, 2, 1.0),
+                    },
                     constrain_fn=lambda v: not self._collides(v["position"], entity="agent"),
                 ),
                 "background": spaces.Dict({"color": rgb([255, 255, 255])}),
                 "goal": spaces.Dict(
-                    {"color": rgb([0, 255, 0]), "position": position([4.5, 4.5], "goal"),
-                     "radius": scalar(0.05, 0.5, 0.2)},
+                    {
+                        "color": rgb([0, 255, 0]),
+                        "position": position([4.5, 4.5], "goal"),
+                        "radius": scalar(0.05, 0.5, 0.2),
+                    },
                     constrain_fn=lambda v: not self._collides(v["position"], entity="goal"),
                 ),
-                "walls": spaces.Dict(walls, sampling_order=["number", "color", "shape", "positions"],
-                                     constrain_fn=lambda v: self._check_walls(v["positions"])),
+                "walls": spaces.Dict(
+                    walls,
+                    sampling_order=["number", "color", "shape", "positions"],
+                    constrain_fn=lambda v: self._check_walls(v["positions"]),
+                ),
             },
             sampling_order=["agent", "goal", "walls", "background"],
             constrain_fn=lambda v: self._check_walls(v["walls"]["positions"]),

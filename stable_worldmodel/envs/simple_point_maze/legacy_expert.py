@@ -8,7 +8,7 @@ import numpy as np
 
 from ... import keys
 from ...policy import ExpertPolicy
-from .legacy import HEIGHT, LAYOUT, MAX_ACTION, WIDTH
+from .legacy import LAYOUT, MAX_ACTION, WIDTH
 
 CELL = 0.05  # grid step (world units)
 _MARGIN = 0.01  # a cell is free when the agent disk grown by this much touches no wall
@@ -84,8 +84,9 @@ class SimplePointMazeV0Expert(ExpertPolicy):
     std. Returns (B, 2) float32 in ``[-0.2, 0.2]``.
     """
 
-    def __init__(self, env_id: str = "swm/SimplePointMaze-v0", noise: float = 0.0, seed: int | None = None,
-                 **kwargs: Any):
+    def __init__(
+        self, env_id: str = "swm/SimplePointMaze-v0", noise: float = 0.0, seed: int | None = None, **kwargs: Any
+    ):
         super().__init__(env_id=env_id, noise=noise, seed=seed, **kwargs)
         self.rng = np.random.default_rng(seed)
         self._fields: dict[bytes, np.ndarray] = {}

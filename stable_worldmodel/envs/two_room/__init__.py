@@ -8,7 +8,15 @@ from __future__ import annotations
 
 from ..._lazy import lazy_getattr
 
-__all__ = ["ExpertPolicy", "TwoRoomEnv", "TwoRoomExpert", "TwoRoomV0Env", "TwoRoomV0Expert", "TwoRoomV1Env", "TwoRoomV1Expert"]
+__all__ = [
+    "ExpertPolicy",
+    "TwoRoomEnv",
+    "TwoRoomExpert",
+    "TwoRoomV0Env",
+    "TwoRoomV0Expert",
+    "TwoRoomV1Env",
+    "TwoRoomV1Expert",
+]
 _WHERE = {
     "TwoRoomEnv": ".env",
     "TwoRoomExpert": ".expert",

@@ -106,7 +106,12 @@ class TwoRoomEnv(PointEnv):
     success_distance = SUCCESS_DISTANCE
     proprio_dim = 2
 
-    def __init__(self, render_mode: str | None = "rgb_array", render_size: tuple[int, int] = (224, 224), render_target: bool = False):
+    def __init__(
+        self,
+        render_mode: str | None = "rgb_array",
+        render_size: tuple[int, int] = (224, 224),
+        render_target: bool = False,
+    ):
         super().__init__(render_mode, render_size, render_target)
         self.world_size = SIZE
         self.observation_space = gym.spaces.Dict(

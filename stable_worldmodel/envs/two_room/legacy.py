@@ -119,13 +119,23 @@ class TwoRoomV0Env(DatasetResetMixin, gym.Env):
             return spaces.RGBBox(init_value=np.array(c, np.uint8))
 
         def radius():
-            return spaces.Box(np.array([15], np.float32), np.array([30], np.float32), shape=(1,), dtype=np.float32,
-                              init_value=np.array([15], np.float32))
+            return spaces.Box(
+                np.array([15], np.float32),
+                np.array([30], np.float32),
+                shape=(1,),
+                dtype=np.float32,
+                init_value=np.array([15], np.float32),
+            )
 
         def position(init, entity):
-            return spaces.Box(np.array([BORDER] * 2, np.float32), np.array([SIZE] * 2, np.float32), shape=(2,),
-                              dtype=np.float32, init_value=np.array(init, np.float32),
-                              constrain_fn=lambda x: not self.check_collide(x, entity=entity))
+            return spaces.Box(
+                np.array([BORDER] * 2, np.float32),
+                np.array([SIZE] * 2, np.float32),
+                shape=(2,),
+                dtype=np.float32,
+                init_value=np.array(init, np.float32),
+                constrain_fn=lambda x: not self.check_collide(x, entity=entity),
+            )
 
         return spaces.Dict(
             {
@@ -135,8 +145,13 @@ class TwoRoomV0Env(DatasetResetMixin, gym.Env):
                         "radius": radius(),
                         "position": position([50.0, 50.0], "agent"),
                         "max_energy": spaces.Discrete(ENERGY_BOUND - 50, start=50, init_value=100),
-                        "speed": spaces.Box(np.array([10], np.float32), np.array([MAX_SPEED], np.float32), shape=(1,),
-                                            dtype=np.float32, init_value=np.array([10.0], np.float32)),
+                        "speed": spaces.Box(
+                            np.array([10], np.float32),
+                            np.array([MAX_SPEED], np.float32),
+                            shape=(1,),
+                            dtype=np.float32,
+                            init_value=np.array([10.0], np.float32),
+                        ),
                     },
                     sampling_order=["color", "radius", "position", "max_energy", "speed"],
                 ),
@@ -200,8 +215,9 @@ class TwoRoomV0Env(DatasetResetMixin, gym.Env):
     def eval_state(self, goal_state: np.ndarray, cur_state: np.ndarray) -> tuple[bool, float]:
         """``(success, distance)`` of the agent at ``cur_state[:2]`` to a goal disk at ``goal_state[:2]``."""
         g, c = np.asarray(goal_state, np.float64)[:2], np.asarray(cur_state, np.float64)[:2]
-        fog, foa = overlap_fractions(c, _scalar(self.variation_space["agent"]["radius"]), g,
-                                     _scalar(self.variation_space["goal"]["radius"]))
+        fog, foa = overlap_fractions(
+            c, _scalar(self.variation_space["agent"]["radius"]), g, _scalar(self.variation_space["goal"]["radius"])
+        )
         return bool(fog >= 0.5 or foa >= 0.5), float(np.linalg.norm(g - c))
 
     # -- gym API ----------------------------------------------------------------------------
@@ -240,8 +256,10 @@ class TwoRoomV0Env(DatasetResetMixin, gym.Env):
             self.space.step(DT)
         self.energy -= 1
         self._fractions = overlap_fractions(
-            self.agent.position, _scalar(self.variation_space["agent"]["radius"]),
-            self._goal_pos, _scalar(self.variation_space["goal"]["radius"]),
+            self.agent.position,
+            _scalar(self.variation_space["agent"]["radius"]),
+            self._goal_pos,
+            _scalar(self.variation_space["goal"]["radius"]),
         )
         terminated = self._fractions[0] >= 0.5 or self._fractions[1] >= 0.5
         return self._obs(), 1.0 if terminated else -0.01, terminated, self.energy <= 0, self._info()
@@ -277,7 +295,7 @@ class TwoRoomV0Env(DatasetResetMixin, gym.Env):
         """``(position, size)`` of the doors along the wall, sorted, overlapping ones merged."""
         n = int(self._value("door", "number"))
         positions, sizes = self._value("door", "position")[:n].tolist(), self._value("door", "size")[:n].tolist()
-        doors = sorted(zip(positions, sizes), key=lambda d: d[0])
+        doors = sorted(zip(positions, sizes, strict=False), key=lambda d: d[0])
         merged: list[tuple[int, int]] = []
         for pos, size in doors:
             pos, size = int(pos), int(size)
@@ -290,6 +308,7 @@ class TwoRoomV0Env(DatasetResetMixin, gym.Env):
 
     def _wall_spans(self) -> tuple[list[tuple[int, int]], list[tuple[int, int]]]:
         """Wall and door spans ``(t0, t1)`` along the wall (each at least 1 px long)."""
+
         def clamp(t):
             return int(max(0, min(SIZE, int(t))))
 

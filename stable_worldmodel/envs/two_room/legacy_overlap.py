@@ -25,14 +25,14 @@ def polygon_area(p: np.ndarray) -> float:
 def convex_overlap(subject: np.ndarray, clip: np.ndarray) -> float:
     """Area of the intersection of two convex CCW polygons (Sutherland-Hodgman)."""
     out = subject
-    for a, b in zip(clip, np.roll(clip, -1, axis=0)):
+    for a, b in zip(clip, np.roll(clip, -1, axis=0), strict=False):
         if len(out) == 0:
             return 0.0
         edge = b - a
         side = edge[0] * (out[:, 1] - a[1]) - edge[1] * (out[:, 0] - a[0])  # >= 0: inside
         nxt, side_n = np.roll(out, -1, axis=0), np.roll(side, -1)
         kept = []
-        for p, q, s, sn in zip(out, nxt, side, side_n):
+        for p, q, s, sn in zip(out, nxt, side, side_n, strict=False):
             if s >= 0:
                 kept.append(p)
             if (s >= 0) != (sn >= 0):

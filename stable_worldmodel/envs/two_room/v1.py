@@ -70,8 +70,13 @@ def _rgb(c) -> spaces.RGBBox:
 
 
 def _box1(low: float, high: float, init: float) -> spaces.Box:
-    return spaces.Box(np.array([low], np.float32), np.array([high], np.float32), shape=(1,), dtype=np.float32,
-                      init_value=np.array([init], np.float32))
+    return spaces.Box(
+        np.array([low], np.float32),
+        np.array([high], np.float32),
+        shape=(1,),
+        dtype=np.float32,
+        init_value=np.array([init], np.float32),
+    )
 
 
 class TwoRoomV1Env(DatasetResetMixin, gym.Env):
@@ -88,7 +93,9 @@ class TwoRoomV1Env(DatasetResetMixin, gym.Env):
     WALL_WIDTH_DEFAULT = 10
     MAX_DOOR = MAX_DOOR
 
-    def __init__(self, render_mode: str | None = "rgb_array", render_target: bool = False, init_value: dict | None = None):
+    def __init__(
+        self, render_mode: str | None = "rgb_array", render_target: bool = False, init_value: dict | None = None
+    ):
         if render_mode not in (None, "rgb_array"):
             raise ConfigError(f"TwoRoomV1Env requires render_mode 'rgb_array' or None, got {render_mode!r}")
         self.render_mode = render_mode
@@ -115,24 +122,41 @@ class TwoRoomV1Env(DatasetResetMixin, gym.Env):
         lo, hi = float(BORDER_SIZE), float(IMG_SIZE - BORDER_SIZE - 1)
 
         def position(init, constrain_fn=None):
-            return spaces.Box(np.array([lo, lo], np.float32), np.array([hi, hi], np.float32), shape=(2,),
-                              dtype=np.float32, init_value=np.array(init, np.float32), constrain_fn=constrain_fn)
+            return spaces.Box(
+                np.array([lo, lo], np.float32),
+                np.array([hi, hi], np.float32),
+                shape=(2,),
+                dtype=np.float32,
+                init_value=np.array(init, np.float32),
+                constrain_fn=constrain_fn,
+            )
 
         # Keys in alphabetical order, as Gymnasium sorts upstream's plain dicts: the per-key seeds
         # follow this order, so a reset seed draws the factors upstream draws.
         return spaces.Dict(
             {
                 "agent": spaces.Dict(
-                    {"color": _rgb([255, 0, 0]), "position": position([60.0, 112.0], self._constrain_agent_not_in_wall),
-                     "radius": _box1(7.0, 14.0, 7.0), "speed": _box1(1.75, 10.5, 5.0)},
+                    {
+                        "color": _rgb([255, 0, 0]),
+                        "position": position([60.0, 112.0], self._constrain_agent_not_in_wall),
+                        "radius": _box1(7.0, 14.0, 7.0),
+                        "speed": _box1(1.75, 10.5, 5.0),
+                    },
                     sampling_order=["color", "radius", "position", "speed"],
                 ),
                 "background": spaces.Dict({"color": _rgb([255, 255, 255])}),
                 "door": spaces.Dict(
-                    {"color": _rgb([255, 255, 255]), "number": spaces.Discrete(MAX_DOOR, start=1, init_value=1),
-                     "position": spaces.MultiDiscrete(nvec=[IMG_SIZE] * MAX_DOOR, init_value=[49] * MAX_DOOR),
-                     "size": spaces.MultiDiscrete(nvec=[21] * MAX_DOOR, start=[1] * MAX_DOOR, init_value=[14] * MAX_DOOR,
-                                                  constrain_fn=self._check_door_fit)},
+                    {
+                        "color": _rgb([255, 255, 255]),
+                        "number": spaces.Discrete(MAX_DOOR, start=1, init_value=1),
+                        "position": spaces.MultiDiscrete(nvec=[IMG_SIZE] * MAX_DOOR, init_value=[49] * MAX_DOOR),
+                        "size": spaces.MultiDiscrete(
+                            nvec=[21] * MAX_DOOR,
+                            start=[1] * MAX_DOOR,
+                            init_value=[14] * MAX_DOOR,
+                            constrain_fn=self._check_door_fit,
+                        ),
+                    },
                     sampling_order=["color", "number", "size", "position"],
                 ),
                 "rendering": spaces.Dict({"render_target": spaces.Discrete(2, init_value=0)}),
@@ -142,8 +166,12 @@ class TwoRoomV1Env(DatasetResetMixin, gym.Env):
                 ),
                 "task": spaces.Dict({"min_steps": spaces.Discrete(100, start=15, init_value=25)}),
                 "wall": spaces.Dict(
-                    {"axis": spaces.Discrete(2, init_value=1), "border_color": _rgb([0, 0, 0]), "color": _rgb([0, 0, 0]),
-                     "thickness": spaces.Discrete(35, start=7, init_value=10)},
+                    {
+                        "axis": spaces.Discrete(2, init_value=1),
+                        "border_color": _rgb([0, 0, 0]),
+                        "color": _rgb([0, 0, 0]),
+                        "thickness": spaces.Discrete(35, start=7, init_value=10),
+                    },
                     sampling_order=["color", "border_color", "thickness", "axis"],
                 ),
             },
@@ -238,8 +266,10 @@ class TwoRoomV1Env(DatasetResetMixin, gym.Env):
         self.wall_pos = float(WALL_CENTER)
 
     def _in_any_door(self, coord: float) -> bool:
-        return any(c - s - DOOR_MARGIN <= coord <= c + s + DOOR_MARGIN
-                   for c, s in zip(self.door_positions.tolist(), self.door_sizes.tolist(), strict=True))
+        return any(
+            c - s - DOOR_MARGIN <= coord <= c + s + DOOR_MARGIN
+            for c, s in zip(self.door_positions.tolist(), self.door_sizes.tolist(), strict=True)
+        )
 
     def _apply_collisions(self, start: np.ndarray, moved: np.ndarray) -> np.ndarray:
         r = float(np.asarray(self.variation_space["agent"]["radius"].value).item())
@@ -278,8 +308,12 @@ class TwoRoomV1Env(DatasetResetMixin, gym.Env):
     def _layout(self) -> np.ndarray:
         v = self.variation_space
         out = np.zeros(4 + 2 * MAX_DOOR, np.float32)
-        out[:4] = (self.wall_axis, self.wall_pos, np.asarray(v["agent"]["radius"].value).item(),
-                   np.asarray(v["agent"]["speed"].value).item())
+        out[:4] = (
+            self.wall_axis,
+            self.wall_pos,
+            np.asarray(v["agent"]["radius"].value).item(),
+            np.asarray(v["agent"]["speed"].value).item(),
+        )
         out[4 : 4 + self.num_doors] = self.door_positions
         out[4 + MAX_DOOR : 4 + MAX_DOOR + self.num_doors] = self.door_sizes
         return out

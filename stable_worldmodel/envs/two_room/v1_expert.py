@@ -35,7 +35,12 @@ class TwoRoomV1Expert(ExpertPolicy):
         pos = np.asarray(infos[keys.STATE], np.float64)[:, -1, :2]
         goal = np.asarray(infos[keys.GOAL_STATE], np.float64)[:, -1, :2]
         layout = np.asarray(infos[LAYOUT], np.float64)[:, -1]
-        waypoint = np.array([self._waypoint(p, g, lay, self.door_fit, self.door_reached) for p, g, lay in zip(pos, goal, layout, strict=True)]).reshape(-1, 2)
+        waypoint = np.array(
+            [
+                self._waypoint(p, g, lay, self.door_fit, self.door_reached)
+                for p, g, lay in zip(pos, goal, layout, strict=True)
+            ]
+        ).reshape(-1, 2)
         delta = waypoint - pos
         dist = np.linalg.norm(delta, axis=1, keepdims=True)
         scale = np.minimum(1.0, dist / np.maximum(layout[:, 3:4], 1e-6)) / np.maximum(dist, 1e-8)
@@ -45,7 +50,9 @@ class TwoRoomV1Expert(ExpertPolicy):
         return np.clip(action, -1.0, 1.0).astype(np.float32)
 
     @staticmethod
-    def _waypoint(pos: np.ndarray, goal: np.ndarray, layout: np.ndarray, door_fit: float, door_reached: float) -> np.ndarray:
+    def _waypoint(
+        pos: np.ndarray, goal: np.ndarray, layout: np.ndarray, door_fit: float, door_reached: float
+    ) -> np.ndarray:
         axis, wall, radius = int(layout[0]), layout[1], layout[2]
         i = 0 if axis == 1 else 1  # the coordinate across the wall
         if (pos[i] > wall) == (goal[i] > wall):

@@ -81,18 +81,7 @@ def shortest_path_lengths(mask: np.ndarray, goal: tuple[int, int]) -> np.ndarray
                 if ok and free[j] and dist[j] < 0:
                     dist[j] = dist[i] + 1
                     queue.append(j)
-    dist = np.array(dist, np.int64).reshape(n, n)
-    return dist
-    dist[gy, gx] = 0
-    queue = deque([(gx, gy)])
-    while queue:
-        x, y = queue.popleft()
-        for dx, dy in MOVES:
-            nx, ny = x + dx, y + dy
-            if 0 <= nx < n and 0 <= ny < n and mask[ny, nx] and dist[ny, nx] < 0:
-                dist[ny, nx] = dist[y, x] + 1
-                queue.append((nx, ny))
-    return dist
+    return np.array(dist, np.int64).reshape(n, n)
 
 
 class VoidRunEnv(DatasetResetMixin, gym.Env):
@@ -167,7 +156,9 @@ class VoidRunEnv(DatasetResetMixin, gym.Env):
                 "goal": spaces.Dict(
                     {
                         "position": spaces.MultiDiscrete(
-                            [n, n], init_value=np.array([n - 2, n - 2], np.int64), constrain_fn=differs_from("agent", "start")
+                            [n, n],
+                            init_value=np.array([n - 2, n - 2], np.int64),
+                            constrain_fn=differs_from("agent", "start"),
                         ),
                         "color": rgb(60, 200, 90),
                     }
@@ -226,7 +217,9 @@ class VoidRunEnv(DatasetResetMixin, gym.Env):
     def _cell(self, xy: np.ndarray, what: str, low: int = 0) -> np.ndarray:
         cell = np.rint(np.asarray(xy, np.float64)).astype(np.int64)
         if np.any(cell < low) or np.any(cell > self.grid_size - 1 - low):
-            raise ConfigError(f"VoidRunEnv requires {what} cells inside the {self.grid_size}x{self.grid_size} grid, got {xy}")
+            raise ConfigError(
+                f"VoidRunEnv requires {what} cells inside the {self.grid_size}x{self.grid_size} grid, got {xy}"
+            )
         return cell
 
     def _set_state(self, state: np.ndarray) -> None:
@@ -293,7 +286,8 @@ class VoidRunEnv(DatasetResetMixin, gym.Env):
         cover[..., 1] = by.T @ (1.0 - m) @ bx
         cover[..., 2] = np.outer(gy[self._goal[1]], gx[self._goal[0]])
         void, floor, broken, goal = (
-            np.asarray(c, np.float32) for c in (v["void"]["color"], v["floor"]["color"], v["floor"]["broken_color"], v["goal"]["color"])
+            np.asarray(c, np.float32)
+            for c in (v["void"]["color"], v["floor"]["color"], v["floor"]["broken_color"], v["goal"]["color"])
         )
         # floor and broken tiles lie side by side on the void; the goal tile lies inside a floor tile
         img = cover @ np.stack([floor - void, broken - void, goal - floor]) + (void + 0.5)

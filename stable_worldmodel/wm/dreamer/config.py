@@ -46,17 +46,49 @@ class DreamerConfig(ImageEncoderConfig):
     subgoal_graph: ClassVar[bool] = True
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "tiny": {
-            "image_size": 64, "cnn_width": 8, "embed_dim": 64, "deter_dim": 64, "stoch_dim": 16, "hidden": 64,
-            "history_size": 4, "num_preds": 1, "batch_size": 16, "lr": 1e-3, "warmup_steps": 50, "steps": 2000,
+            "image_size": 64,
+            "cnn_width": 8,
+            "embed_dim": 64,
+            "deter_dim": 64,
+            "stoch_dim": 16,
+            "hidden": 64,
+            "history_size": 4,
+            "num_preds": 1,
+            "batch_size": 16,
+            "lr": 1e-3,
+            "warmup_steps": 50,
+            "steps": 2000,
         },
         "small": {
-            "image_size": 64, "cnn_width": 32, "embed_dim": 256, "deter_dim": 256, "stoch_dim": 32, "hidden": 256,
-            "history_size": 8, "num_preds": 1, "batch_size": 32, "lr": 3e-4, "steps": 20000,
+            "image_size": 64,
+            "cnn_width": 32,
+            "embed_dim": 256,
+            "deter_dim": 256,
+            "stoch_dim": 32,
+            "hidden": 256,
+            "history_size": 8,
+            "num_preds": 1,
+            "batch_size": 32,
+            "lr": 3e-4,
+            "steps": 20000,
         },
         "paper": {
-            "image_size": 64, "cnn_width": 64, "embed_dim": 512, "deter_dim": 512, "stoch_dim": 32, "hidden": 512,
-            "history_size": 15, "num_preds": 1, "image_mean": IMAGENET_MEAN, "image_std": IMAGENET_STD,
-            "batch_size": 16, "lr": 1e-4, "weight_decay": 0.0, "warmup_steps": 0, "grad_clip": 1000.0, "steps": 100000,
+            "image_size": 64,
+            "cnn_width": 64,
+            "embed_dim": 512,
+            "deter_dim": 512,
+            "stoch_dim": 32,
+            "hidden": 512,
+            "history_size": 15,
+            "num_preds": 1,
+            "image_mean": IMAGENET_MEAN,
+            "image_std": IMAGENET_STD,
+            "batch_size": 16,
+            "lr": 1e-4,
+            "weight_decay": 0.0,
+            "warmup_steps": 0,
+            "grad_clip": 1000.0,
+            "steps": 100000,
         },
     }
 
@@ -87,7 +119,9 @@ class DreamerConfig(ImageEncoderConfig):
         if not isinstance(self.reward_head, bool):
             raise ConfigError(f"{name} requires reward_head to be a bool, got {self.reward_head!r}")
         if self.num_steps < 2:
-            raise ConfigError(f"{name} requires at least 2 frames per sample (history_size + num_preds), got {self.num_steps}")
+            raise ConfigError(
+                f"{name} requires at least 2 frames per sample (history_size + num_preds), got {self.num_steps}"
+            )
         self.needs_reward = self.reward_head
 
     def target_tree(self, action_dim: int) -> dict[str, Any]:
@@ -96,11 +130,21 @@ class DreamerConfig(ImageEncoderConfig):
         return {
             "_target_": self.target,
             "encoder": self.encoder_tree(),
-            "decoder": {"_target_": f"{_P}.frame.module.FrameDecoder", "embed_dim": feat, "image_size": self.image_size,
-                        "width": self.cnn_width},
-            "rssm": {"_target_": f"{_P}.dreamer.module.RSSM", "embed_dim": self.encoder_dim,
-                     "action_dim": self.frameskip * int(action_dim), "deter_dim": self.deter_dim,
-                     "stoch_dim": self.stoch_dim, "hidden": self.hidden, "min_std": float(self.min_std)},
+            "decoder": {
+                "_target_": f"{_P}.frame.module.FrameDecoder",
+                "embed_dim": feat,
+                "image_size": self.image_size,
+                "width": self.cnn_width,
+            },
+            "rssm": {
+                "_target_": f"{_P}.dreamer.module.RSSM",
+                "embed_dim": self.encoder_dim,
+                "action_dim": self.frameskip * int(action_dim),
+                "deter_dim": self.deter_dim,
+                "stoch_dim": self.stoch_dim,
+                "hidden": self.hidden,
+                "min_std": float(self.min_std),
+            },
             "action_dim": self.frameskip * int(action_dim),
             "history_size": self.history_size,
             "kl_dyn": float(self.kl_dyn),

@@ -41,9 +41,21 @@ class Dreamer(nn.Module):
     #: shows them without a frame decoder run
     decodes_frames = True
 
-    def __init__(self, encoder: nn.Module, decoder: nn.Module, rssm: RSSM, action_dim: int, history_size: int = 4,
-                 kl_dyn: float = 0.5, kl_rep: float = 0.1, free_bits: float = 1.0, recon_coef: float = 1.0,
-                 reward_head: bool = False, reward_coef: float = 1.0, embed_coef: float = 1.0):
+    def __init__(
+        self,
+        encoder: nn.Module,
+        decoder: nn.Module,
+        rssm: RSSM,
+        action_dim: int,
+        history_size: int = 4,
+        kl_dyn: float = 0.5,
+        kl_rep: float = 0.1,
+        free_bits: float = 1.0,
+        recon_coef: float = 1.0,
+        reward_head: bool = False,
+        reward_coef: float = 1.0,
+        embed_coef: float = 1.0,
+    ):
         super().__init__()
         if int(action_dim) != rssm.action_dim:
             raise ConfigError(f"Dreamer requires action_dim == rssm.action_dim, got {action_dim} and {rssm.action_dim}")
@@ -57,7 +69,9 @@ class Dreamer(nn.Module):
         self.goal_cost = "final"  # see GOAL_COSTS; set by planning, not saved
         size = getattr(decoder, "image_size", None)
         if not isinstance(size, int):
-            raise ConfigError(f"Dreamer requires a decoder with an int image_size (a FrameDecoder), got {type(decoder).__name__}")
+            raise ConfigError(
+                f"Dreamer requires a decoder with an int image_size (a FrameDecoder), got {type(decoder).__name__}"
+            )
         # the training frames' mean (fit_to_frames): the decoder learns what differs from it
         self.register_buffer("frame_mean", torch.zeros(int(getattr(decoder, "channels", 3)), size, size))
 
@@ -88,8 +102,10 @@ class Dreamer(nn.Module):
         if action is None:
             return like.new_zeros(n, t, self.action_dim)
         if action.shape[-1] != self.action_dim or action.shape[:-1] != (n, t):
-            raise SpaceError(f"{type(self).__name__} requires actions of shape ({n}, {t}, {self.action_dim}), "
-                             f"got {tuple(action.shape)}")
+            raise SpaceError(
+                f"{type(self).__name__} requires actions of shape ({n}, {t}, {self.action_dim}), "
+                f"got {tuple(action.shape)}"
+            )
         return torch.nan_to_num(action.to(like.dtype), 0.0)
 
     def observe(self, pixels: torch.Tensor, action: torch.Tensor | None = None):
@@ -126,8 +142,10 @@ class Dreamer(nn.Module):
         :func:`~stable_worldmodel.train.train` before the first step): the static background is
         then reconstructed from the start, and the latent spends its capacity on what moves."""
         if pixels.ndim != 4 or pixels.shape[0] < 1 or tuple(pixels.shape[1:]) != tuple(self.frame_mean.shape):
-            raise SpaceError(f"{type(self).__name__}.fit_to_frames requires frames (N, {', '.join(map(str, self.frame_mean.shape))}), "
-                             f"got shape {tuple(pixels.shape)}")
+            raise SpaceError(
+                f"{type(self).__name__}.fit_to_frames requires frames (N, {', '.join(map(str, self.frame_mean.shape))}), "
+                f"got shape {tuple(pixels.shape)}"
+            )
         self.frame_mean.copy_(pixels.to(self.frame_mean).mean(0))
 
     # -- planning -------------------------------------------------------------------------------
@@ -159,15 +177,19 @@ class Dreamer(nn.Module):
         with the prior from the last context state. Adds ``predicted_emb (B, S, H + 1, F)``:
         the ``T`` context features then ``H - T + 1`` imagined ones."""
         if action_sequence.ndim not in (3, 4) or action_sequence.shape[-1] != self.action_dim:
-            raise SpaceError(f"{type(self).__name__}.rollout requires candidates (B, S, H, {self.action_dim}), "
-                             f"got shape {tuple(action_sequence.shape)}")
+            raise SpaceError(
+                f"{type(self).__name__}.rollout requires candidates (B, S, H, {self.action_dim}), "
+                f"got shape {tuple(action_sequence.shape)}"
+            )
         squeeze = action_sequence.ndim == 3
         cand = action_sequence.unsqueeze(1) if squeeze else action_sequence
         b, s, h, _ = cand.shape
         ctx = self._context(info, b, None if squeeze else s)  # (B, T, F)
         t, f = ctx.shape[1], ctx.shape[2]
         if h < t:
-            raise ConfigError(f"{type(self).__name__}.rollout requires at least {t} actions (one per context frame), got {h}")
+            raise ConfigError(
+                f"{type(self).__name__}.rollout requires at least {t} actions (one per context frame), got {h}"
+            )
         n = b * s
         start = ctx[:, -1].unsqueeze(1).expand(b, s, f).reshape(n, f)
         imagined = self.rssm.imagine(start, cand.reshape(n, h, -1)[:, t - 1 :].to(ctx.dtype))
@@ -200,8 +222,11 @@ class Dreamer(nn.Module):
         (pm, ps), (qm, qs) = prior, post
         dyn = gaussian_kl(qm.detach(), qs.detach(), pm, ps)
         rep = gaussian_kl(qm, qs, pm.detach(), ps.detach())
-        return {"kl": dyn.detach().mean(), "dyn_loss": dyn.clamp_min(self.free_bits).mean(),
-                "rep_loss": rep.clamp_min(self.free_bits).mean()}
+        return {
+            "kl": dyn.detach().mean(),
+            "dyn_loss": dyn.clamp_min(self.free_bits).mean(),
+            "rep_loss": rep.clamp_min(self.free_bits).mean(),
+        }
 
     def loss(self, batch: dict) -> dict:
         """``batch``: ``pixels (B, T, C, h, w)``, ``action (B, T, A)`` (and ``reward (B, T)`` with a
@@ -221,8 +246,12 @@ class Dreamer(nn.Module):
         # what imagination gives: h and the prior's mean (frame 0's prior knows nothing yet)
         prior_feats = torch.cat([feats[:, 1:, : self.rssm.deter_dim], prior[0][:, 1:]], -1)
         out["embed_loss"] = F.mse_loss(self.predict_embedding(prior_feats), embed[:, 1:].detach())
-        total = (self.recon_coef * recon + self.kl_dyn * out["dyn_loss"] + self.kl_rep * out["rep_loss"]
-                 + self.embed_coef * out["embed_loss"])
+        total = (
+            self.recon_coef * recon
+            + self.kl_dyn * out["dyn_loss"]
+            + self.kl_rep * out["rep_loss"]
+            + self.embed_coef * out["embed_loss"]
+        )
         if self.reward is not None:
             reward = _require(batch, keys.REWARD, who).to(feats.dtype)
             pred = self.reward(feats[:, 1:]).squeeze(-1)  # reward[:, k] is earned by the block leading to frame k + 1

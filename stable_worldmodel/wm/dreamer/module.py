@@ -33,11 +33,23 @@ class RSSM(nn.Module):
     ``std = softplus(.) + min_std``. ``z`` is sampled in training mode and is the mean in eval mode.
     """
 
-    def __init__(self, embed_dim: int, action_dim: int, deter_dim: int = 64, stoch_dim: int = 16, hidden: int = 64,
-                 min_std: float = 0.1):
+    def __init__(
+        self,
+        embed_dim: int,
+        action_dim: int,
+        deter_dim: int = 64,
+        stoch_dim: int = 16,
+        hidden: int = 64,
+        min_std: float = 0.1,
+    ):
         super().__init__()
-        for name, value in (("embed_dim", embed_dim), ("action_dim", action_dim), ("deter_dim", deter_dim),
-                            ("stoch_dim", stoch_dim), ("hidden", hidden)):
+        for name, value in (
+            ("embed_dim", embed_dim),
+            ("action_dim", action_dim),
+            ("deter_dim", deter_dim),
+            ("stoch_dim", stoch_dim),
+            ("hidden", hidden),
+        ):
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ConfigError(f"RSSM requires {name} to be a positive int, got {value!r}")
         self.embed_dim, self.action_dim, self.deter_dim, self.stoch_dim = embed_dim, action_dim, deter_dim, stoch_dim

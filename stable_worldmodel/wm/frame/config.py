@@ -43,7 +43,9 @@ class FrameConfig(WorldModelConfig):
         from ..utils import read_protocol, resolve_checkpoint
 
         if not isinstance(self.source, str) or not self.source:
-            raise ConfigError("FrameConfig requires source, the run whose latents it decodes (swm train frame --from RUN)")
+            raise ConfigError(
+                "FrameConfig requires source, the run whose latents it decodes (swm train frame --from RUN)"
+            )
         if isinstance(self.width, bool) or not isinstance(self.width, int) or self.width < 1:
             raise ConfigError(f"FrameConfig requires width to be a positive int, got {self.width!r}")
         weights = resolve_checkpoint(self.source)
@@ -72,10 +74,8 @@ class FrameConfig(WorldModelConfig):
         return self._source_protocol.get("dataset")
 
     def target_tree(self, action_dim: int) -> dict[str, Any]:
-        from ..utils import CONFIG_NAME, _read_json
-
         from ..trust import resolve_targets
-        from ..utils import TARGET_ALIASES
+        from ..utils import CONFIG_NAME, TARGET_ALIASES, _read_json
 
         source_path = self._source_weights.parent / CONFIG_NAME
         source_tree = _read_json(source_path, "the source run's model config")

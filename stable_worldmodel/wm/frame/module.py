@@ -27,7 +27,12 @@ class FrameDecoder(nn.Module):
 
     def __init__(self, embed_dim: int, image_size: int, channels: int = 3, width: int = 16):
         super().__init__()
-        for name, value in (("embed_dim", embed_dim), ("image_size", image_size), ("channels", channels), ("width", width)):
+        for name, value in (
+            ("embed_dim", embed_dim),
+            ("image_size", image_size),
+            ("channels", channels),
+            ("width", width),
+        ):
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ConfigError(f"FrameDecoder requires {name} to be a positive int, got {value!r}")
         self.image_size, self.channels = image_size, channels
@@ -112,8 +117,10 @@ class PredictionPanel:
 
     def __init__(self, world_model: Any, frame_model: FrameModel | None, image_mean, image_std):
         if frame_model is None and not (isinstance(world_model, DecodesFrames) and world_model.decodes_frames):
-            raise ConfigError(f"PredictionPanel requires a frame model, or a world model with its own decode; "
-                              f"{type(world_model).__name__} has none")
+            raise ConfigError(
+                f"PredictionPanel requires a frame model, or a world model with its own decode; "
+                f"{type(world_model).__name__} has none"
+            )
         self.world_model, self.frame_model = world_model, frame_model
         self.mean = torch.as_tensor(image_mean, dtype=torch.float32).view(-1, 1, 1)
         self.std = torch.as_tensor(image_std, dtype=torch.float32).view(-1, 1, 1)

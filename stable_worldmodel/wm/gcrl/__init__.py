@@ -6,8 +6,18 @@ lazily (``.config`` needs no torch)."""
 from ..._lazy import lazy_getattr
 
 _MODULE = (
-    "Attention", "ConvLogitsEncoder", "DoublePredictorWrapper", "Embedder", "EvalOnly", "ExpectileLoss", "MetricValuePredictor",
-    "Predictor", "QPredictor", "SelfAttentionTransformer", "TeacherStudentWrapper", "Transformer",
+    "Attention",
+    "ConvLogitsEncoder",
+    "DoublePredictorWrapper",
+    "Embedder",
+    "EvalOnly",
+    "ExpectileLoss",
+    "MetricValuePredictor",
+    "Predictor",
+    "QPredictor",
+    "SelfAttentionTransformer",
+    "TeacherStudentWrapper",
+    "Transformer",
 )
 _CONFIG = ("GCRLConfig", "GCBCConfig", "GCIVLConfig", "GCIQLConfig", "GOAL_SAMPLING")
 _WHERE = {"GCRL": ".gcrl", **{n: ".module" for n in _MODULE}, **{n: ".config" for n in _CONFIG}}

@@ -51,7 +51,9 @@ ACTOR_GOAL_PIXELS = f"actor_{GOAL_PIXELS}"
 
 def _get(batch: dict, key: str, model: GCRL) -> torch.Tensor:
     if key not in batch:
-        raise UnknownNameError(f"{type(model).__name__}.loss ({model.algorithm}) requires batch[{key!r}], got keys {sorted(batch)}")
+        raise UnknownNameError(
+            f"{type(model).__name__}.loss ({model.algorithm}) requires batch[{key!r}], got keys {sorted(batch)}"
+        )
     return batch[key]
 
 
@@ -59,7 +61,9 @@ def _frames(model: GCRL, batch: dict, extra: int) -> int:
     """H (the policy's frames), after checking the batch holds ``H + extra`` frames."""
     pixels = _get(batch, keys.PIXELS, model)
     if pixels.ndim != 5:
-        raise SpaceError(f"{type(model).__name__}.loss requires pixels of shape (B, T, C, h, w), got {tuple(pixels.shape)}")
+        raise SpaceError(
+            f"{type(model).__name__}.loss requires pixels of shape (B, T, C, h, w), got {tuple(pixels.shape)}"
+        )
     h = model.history_size
     if pixels.shape[1] < h + extra:
         raise ConfigError(
@@ -123,7 +127,9 @@ def _actor(model: GCRL, batch: dict, info: dict, h: int, advantage: Callable[[to
     if ACTOR_GOAL_PIXELS in batch:
         with torch.set_grad_enabled(grad and torch.is_grad_enabled()):
             prefix = f"actor_{keys.goal_key('')}"
-            goal = model.encode(dict(batch), pixels_key=ACTOR_GOAL_PIXELS, prefix=prefix, target="actor_goal_embed")["actor_goal_embed"]
+            goal = model.encode(dict(batch), pixels_key=ACTOR_GOAL_PIXELS, prefix=prefix, target="actor_goal_embed")[
+                "actor_goal_embed"
+            ]
     emb = info["embed"][:, :h]
     if not grad:
         emb, goal = emb.detach(), goal.detach()
@@ -169,7 +175,13 @@ def gcivl_loss(model: GCRL, batch: dict) -> dict:
 
     actor = _actor(model, batch, info, h, advantage)
     loss = value_loss + actor["actor_loss"]
-    return {"loss": loss, "value_loss": value_loss, **actor, "v_mean": value.detach().mean(), "emb": info["pixels_embed"]}
+    return {
+        "loss": loss,
+        "value_loss": value_loss,
+        **actor,
+        "v_mean": value.detach().mean(),
+        "emb": info["pixels_embed"],
+    }
 
 
 def gciql_loss(model: GCRL, batch: dict) -> dict:
@@ -191,7 +203,11 @@ def gciql_loss(model: GCRL, batch: dict) -> dict:
     actor = _actor(model, batch, info, h, advantage)
     loss = value_loss + critic_loss + actor["actor_loss"]
     return {
-        "loss": loss, "value_loss": value_loss, "critic_loss": critic_loss, **actor, "v_mean": value.detach().mean(),
+        "loss": loss,
+        "value_loss": value_loss,
+        "critic_loss": critic_loss,
+        **actor,
+        "v_mean": value.detach().mean(),
         "emb": info["pixels_embed"],
     }
 

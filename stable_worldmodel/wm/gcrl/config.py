@@ -33,12 +33,16 @@ VALUE_HEADS = ("transformer", "metric")
 _P = "stable_worldmodel.wm.gcrl"
 
 
-def check_goal_probabilities(probabilities: Mapping[str, float], owner: str, allow_empty: bool = False) -> dict[str, float]:
+def check_goal_probabilities(
+    probabilities: Mapping[str, float], owner: str, allow_empty: bool = False
+) -> dict[str, float]:
     """``probabilities`` as a dict over :data:`GOAL_SAMPLING` (unknown names raise
     :class:`~stable_worldmodel.errors.UnknownNameError` with "did you mean"); values must be
     >= 0 and sum to 1."""
     if not isinstance(probabilities, Mapping):
-        raise ConfigError(f"{owner} requires goal probabilities as a mapping {{name: p}} over {GOAL_SAMPLING}, got {probabilities!r}")
+        raise ConfigError(
+            f"{owner} requires goal probabilities as a mapping {{name: p}} over {GOAL_SAMPLING}, got {probabilities!r}"
+        )
     probs = dict(probabilities)
     if not probs and allow_empty:
         return probs
@@ -48,7 +52,9 @@ def check_goal_probabilities(probabilities: Mapping[str, float], owner: str, all
         if isinstance(p, bool) or not isinstance(p, (int, float)) or not p >= 0:
             raise ConfigError(f"{owner} requires goal probability {name!r} >= 0, got {p!r}")
     if not math.isclose(sum(probs.values()), 1.0, abs_tol=1e-6):
-        raise ConfigError(f"{owner} requires goal probabilities summing to 1, got {probs} (sum {sum(probs.values()):g})")
+        raise ConfigError(
+            f"{owner} requires goal probabilities summing to 1, got {probs} (sum {sum(probs.values()):g})"
+        )
     return {k: float(v) for k, v in probs.items()}
 
 
@@ -56,20 +62,60 @@ def _presets(paper_lr: float, paper_dropout: float, **common: Any) -> dict[str, 
     """``tiny`` (CPU, minutes), ``small`` (a GPU) and ``paper`` (upstream's recipe)."""
     return {
         "tiny": {
-            "image_size": 64, "embed_dim": 32, "cnn_width": 8, "depth": 3, "heads": 2, "dim_head": 16, "mlp_dim": 64,
-            "history_size": 1, "frameskip": 1, "batch_size": 64, "lr": 1e-3, "warmup_steps": 100, "steps": 2000,
-            "q_hidden": 64, "metric_dim": 32, **common,
+            "image_size": 64,
+            "embed_dim": 32,
+            "cnn_width": 8,
+            "depth": 3,
+            "heads": 2,
+            "dim_head": 16,
+            "mlp_dim": 64,
+            "history_size": 1,
+            "frameskip": 1,
+            "batch_size": 64,
+            "lr": 1e-3,
+            "warmup_steps": 100,
+            "steps": 2000,
+            "q_hidden": 64,
+            "metric_dim": 32,
+            **common,
         },
         "small": {
-            "encoder": "vit", "vit_size": "tiny", "patch_size": 8, "vit_overrides": {"num_hidden_layers": 6},
-            "depth": 4, "heads": 8, "dim_head": 32, "mlp_dim": 768, "history_size": 3, "frameskip": 1,
-            "image_mean": IMAGENET_MEAN, "image_std": IMAGENET_STD, "batch_size": 128, "lr": 3e-4, "steps": 20000, **common,
+            "encoder": "vit",
+            "vit_size": "tiny",
+            "patch_size": 8,
+            "vit_overrides": {"num_hidden_layers": 6},
+            "depth": 4,
+            "heads": 8,
+            "dim_head": 32,
+            "mlp_dim": 768,
+            "history_size": 3,
+            "frameskip": 1,
+            "image_mean": IMAGENET_MEAN,
+            "image_std": IMAGENET_STD,
+            "batch_size": 128,
+            "lr": 3e-4,
+            "steps": 20000,
+            **common,
         },
         "paper": {
-            "encoder": "vit", "vit_size": "tiny", "patch_size": 14, "image_size": 224, "depth": 6, "heads": 16,
-            "dim_head": 64, "mlp_dim": 2048, "dropout": paper_dropout, "history_size": 3, "frameskip": 1,
-            "image_mean": IMAGENET_MEAN, "image_std": IMAGENET_STD, "batch_size": 32, "lr": paper_lr,
-            "warmup_steps": 1000, "steps": 100000, **common,
+            "encoder": "vit",
+            "vit_size": "tiny",
+            "patch_size": 14,
+            "image_size": 224,
+            "depth": 6,
+            "heads": 16,
+            "dim_head": 64,
+            "mlp_dim": 2048,
+            "dropout": paper_dropout,
+            "history_size": 3,
+            "frameskip": 1,
+            "image_mean": IMAGENET_MEAN,
+            "image_std": IMAGENET_STD,
+            "batch_size": 32,
+            "lr": paper_lr,
+            "warmup_steps": 1000,
+            "steps": 100000,
+            **common,
         },
     }
 
@@ -117,7 +163,9 @@ class GCRLConfig(ImageEncoderConfig, PredictorConfig):
         for key, allowed in (("pool_type", POOL_TYPES), ("value_head", VALUE_HEADS)):
             value = getattr(self, key)
             if value not in allowed:
-                raise ConfigError(f"{name} requires {key} in {allowed}, got {value!r}.{did_you_mean(str(value), allowed)}")
+                raise ConfigError(
+                    f"{name} requires {key} in {allowed}, got {value!r}.{did_you_mean(str(value), allowed)}"
+                )
         least = 3 if self.pool_type == "attention" else 2
         if self.depth < least:
             raise ConfigError(
@@ -128,17 +176,28 @@ class GCRLConfig(ImageEncoderConfig, PredictorConfig):
             value = getattr(self, key)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ConfigError(f"{name} requires {key} to be a positive int, got {value!r}")
-        if not (0.0 <= self.discount <= 1.0 and 0.0 < self.expectile < 1.0 and 0.0 <= self.value_ema < 1.0 and 0.0 < self.goal_gamma < 1.0):
+        if not (
+            0.0 <= self.discount <= 1.0
+            and 0.0 < self.expectile < 1.0
+            and 0.0 <= self.value_ema < 1.0
+            and 0.0 < self.goal_gamma < 1.0
+        ):
             raise ConfigError(
                 f"{name} requires discount in [0, 1], expectile in (0, 1), value_ema in [0, 1) and goal_gamma in (0, 1), "
                 f"got {self.discount}, {self.expectile}, {self.value_ema}, {self.goal_gamma}"
             )
         if self.awr_alpha < 0 or self.log_std_min > self.log_std_max:
-            raise ConfigError(f"{name} requires awr_alpha >= 0 and log_std_min <= log_std_max, got {self.awr_alpha}, {self.log_std_min}, {self.log_std_max}")
+            raise ConfigError(
+                f"{name} requires awr_alpha >= 0 and log_std_min <= log_std_max, got {self.awr_alpha}, {self.log_std_min}, {self.log_std_max}"
+            )
         if self.encoder == "vit" and self.image_size % self.patch_size:
-            raise ConfigError(f"{name} requires image_size divisible by patch_size, got {self.image_size} and {self.patch_size}")
+            raise ConfigError(
+                f"{name} requires image_size divisible by patch_size, got {self.image_size} and {self.patch_size}"
+            )
         self.goal_probabilities = check_goal_probabilities(self.goal_probabilities, name)
-        self.actor_goal_probabilities = check_goal_probabilities(self.actor_goal_probabilities, f"{name} (actor)", allow_empty=True)
+        self.actor_goal_probabilities = check_goal_probabilities(
+            self.actor_goal_probabilities, f"{name} (actor)", allow_empty=True
+        )
 
     @property
     def num_steps(self) -> int:
@@ -153,19 +212,35 @@ class GCRLConfig(ImageEncoderConfig, PredictorConfig):
     def encoder_tree(self) -> dict[str, Any]:
         if self.encoder == "vit":
             return super().encoder_tree()
-        return {"_target_": f"{_P}.module.ConvLogitsEncoder", "image_size": self.image_size, "width": self.cnn_width, "hidden_size": self.embed_dim}
+        return {
+            "_target_": f"{_P}.module.ConvLogitsEncoder",
+            "image_size": self.image_size,
+            "width": self.cnn_width,
+            "hidden_size": self.embed_dim,
+        }
 
     def _head(self, target: str, **extra: Any) -> dict[str, Any]:
         return {
-            "_target_": f"{_P}.module.{target}", "num_patches": self.num_patches, "num_frames": self.history_size,
-            "dim": self.encoder_dim, "depth": self.depth, "heads": self.heads, "mlp_dim": self.mlp_dim,
-            "dim_head": self.dim_head, "dropout": self.dropout, "emb_dropout": 0.0, **extra,
+            "_target_": f"{_P}.module.{target}",
+            "num_patches": self.num_patches,
+            "num_frames": self.history_size,
+            "dim": self.encoder_dim,
+            "depth": self.depth,
+            "heads": self.heads,
+            "mlp_dim": self.mlp_dim,
+            "dim_head": self.dim_head,
+            "dropout": self.dropout,
+            "emb_dropout": 0.0,
+            **extra,
         }
 
     def _ema(self, student: dict[str, Any]) -> dict[str, Any]:
         return {
-            "_target_": f"{_P}.module.TeacherStudentWrapper", "student": student, "warm_init": True,
-            "base_ema_coefficient": self.value_ema, "final_ema_coefficient": self.value_ema,
+            "_target_": f"{_P}.module.TeacherStudentWrapper",
+            "student": student,
+            "warm_init": True,
+            "base_ema_coefficient": self.value_ema,
+            "final_ema_coefficient": self.value_ema,
         }
 
     def target_tree(self, action_dim: int) -> dict[str, Any]:
@@ -178,12 +253,15 @@ class GCRLConfig(ImageEncoderConfig, PredictorConfig):
         }
         if self.algorithm != "gcbc":
             value = (
-                self._head("MetricValuePredictor", embed_dim=self.metric_dim) if self.value_head == "metric"
+                self._head("MetricValuePredictor", embed_dim=self.metric_dim)
+                if self.value_head == "metric"
                 else self._head("Predictor", out_dim=1, pool_type="mean")
             )
             tree["value_predictor"] = self._ema(value)
         if self.algorithm == "gciql":
-            tree["critic_predictor"] = self._ema(self._head("QPredictor", action_dim=block, q_hidden_dim=self.q_hidden, pool_type="mean"))
+            tree["critic_predictor"] = self._ema(
+                self._head("QPredictor", action_dim=block, q_hidden_dim=self.q_hidden, pool_type="mean")
+            )
         tree.update(history_size=self.history_size, log_std_min=self.log_std_min, log_std_max=self.log_std_max)
         tree.update(self.model_kwargs(action_dim))
         return tree
@@ -191,7 +269,12 @@ class GCRLConfig(ImageEncoderConfig, PredictorConfig):
     def model_kwargs(self, action_dim: int) -> dict[str, Any]:
         kwargs: dict[str, Any] = {"algorithm": self.algorithm}
         if self.algorithm != "gcbc":
-            kwargs.update(discount=self.discount, expectile=self.expectile, awr_alpha=self.awr_alpha, actor_encoder_grad=self.actor_encoder_grad)
+            kwargs.update(
+                discount=self.discount,
+                expectile=self.expectile,
+                awr_alpha=self.awr_alpha,
+                actor_encoder_grad=self.actor_encoder_grad,
+            )
         return kwargs
 
 

@@ -36,8 +36,15 @@ class GoalImageEncoding:
     def _image_encoder(self) -> nn.Module:  # pragma: no cover - abstract
         raise NotImplementedError("_image_encoder() -> the module that embeds (N, C, h, w) images")
 
-    def encode(self, info: dict, pixels_key: str = keys.PIXELS, emb_keys: Any = None, prefix: str | None = None,
-               target: str = "embed", is_video: bool = False) -> dict:
+    def encode(
+        self,
+        info: dict,
+        pixels_key: str = keys.PIXELS,
+        emb_keys: Any = None,
+        prefix: str | None = None,
+        target: str = "embed",
+        is_video: bool = False,
+    ) -> dict:
         """Add ``info[target]: (B, T, P, d')``: the embeddings of ``info[pixels_key] (B, T, C, h, w)``
         (also as ``pixels_<target>``), each extra encoder's ``<key>_<target> (B, T, e)`` of
         ``info[<prefix><key>]`` tiled over the P tokens and concatenated (``d' = d + sum e``).

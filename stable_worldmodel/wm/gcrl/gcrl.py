@@ -29,7 +29,9 @@ __all__ = ["GCRL"]
 def _out_features(head: nn.Module) -> int:
     last = head[-1] if isinstance(head, nn.Sequential) else head
     if not isinstance(last, nn.Linear):
-        raise ConfigError(f"GCRL requires action_predictor.out_proj to be a Linear (or a Sequential ending with one), got {type(head).__name__}")
+        raise ConfigError(
+            f"GCRL requires action_predictor.out_proj to be a Linear (or a Sequential ending with one), got {type(head).__name__}"
+        )
     return last.out_features
 
 
@@ -91,7 +93,9 @@ class GCRL(GoalImageEncoding, nn.Module):
         if missing:
             raise ConfigError(f"GCRL(algorithm={algorithm!r}) requires {' and '.join(missing)}, got None")
         if not 0.0 <= discount <= 1.0 or awr_alpha < 0 or awr_max_weight <= 0:
-            raise ConfigError(f"GCRL requires 0 <= discount <= 1, awr_alpha >= 0 and awr_max_weight > 0, got {discount}, {awr_alpha}, {awr_max_weight}")
+            raise ConfigError(
+                f"GCRL requires 0 <= discount <= 1, awr_alpha >= 0 and awr_max_weight > 0, got {discount}, {awr_alpha}, {awr_max_weight}"
+            )
         self.algorithm, self.discount = algorithm, float(discount)
         self.expectile = float(expectile if expectile is not None else (0.9 if algorithm == "gciql" else 0.7))
         self.awr_alpha, self.awr_max_weight = float(awr_alpha), float(awr_max_weight)
@@ -104,7 +108,9 @@ class GCRL(GoalImageEncoding, nn.Module):
     def _clamped_log_stds(self) -> torch.Tensor:
         return self.log_stds.clamp(self.log_std_min, self.log_std_max)
 
-    def predict_actions(self, embedding: torch.Tensor, embedding_goal: torch.Tensor, temperature: float = 1.0) -> tuple[torch.Tensor, torch.Tensor]:
+    def predict_actions(
+        self, embedding: torch.Tensor, embedding_goal: torch.Tensor, temperature: float = 1.0
+    ) -> tuple[torch.Tensor, torch.Tensor]:
         """``embedding (B, T, P, d)``, ``embedding_goal (B, 1, P, d)`` -> means ``(B, T, A)``, stds ``(A,)`` (times ``temperature``)."""
         means = self.action_predictor(embedding.flatten(1, 2), embedding_goal.flatten(1, 2))
         return means, self._clamped_log_stds().exp() * temperature
@@ -112,7 +118,9 @@ class GCRL(GoalImageEncoding, nn.Module):
     def predict_values(self, embedding: torch.Tensor, embedding_goal: torch.Tensor) -> torch.Tensor:
         """``V(s, g)`` per frame: ``(B, T, 1)`` (the EMA teacher of a wrapped value head)."""
         if self.value_predictor is None:
-            raise ConfigError(f"{type(self).__name__}.predict_values requires a value_predictor, got None ({self.algorithm} model)")
+            raise ConfigError(
+                f"{type(self).__name__}.predict_values requires a value_predictor, got None ({self.algorithm} model)"
+            )
         return self.value_predictor(embedding.flatten(1, 2), embedding_goal.flatten(1, 2))
 
     # -- acting -----------------------------------------------------------------------------

@@ -99,8 +99,17 @@ class Attention(nn.Module):
     are the persistent buffer ``causal_mask`` (True = attend), as upstream.
     """
 
-    def __init__(self, dim: int, heads: int = 8, dim_head: int = 64, dropout: float = 0.0, num_patches: int = 1,
-                 num_frames: int = 1, att_type: str = "self", causal: bool = False):
+    def __init__(
+        self,
+        dim: int,
+        heads: int = 8,
+        dim_head: int = 64,
+        dropout: float = 0.0,
+        num_patches: int = 1,
+        num_frames: int = 1,
+        att_type: str = "self",
+        causal: bool = False,
+    ):
         super().__init__()
         if att_type not in ATT_TYPES:
             raise ConfigError(f"Attention requires att_type in {ATT_TYPES}, got {att_type!r}")
@@ -148,7 +157,9 @@ class Attention(nn.Module):
         q = self.to_q(q_in)
         k, v = self.to_kv(kv).chunk(2, dim=-1)
         p = self.dropout.p if self.training else 0.0
-        out = F.scaled_dot_product_attention(self._split(q), self._split(k), self._split(v), attn_mask=mask, dropout_p=p)
+        out = F.scaled_dot_product_attention(
+            self._split(q), self._split(k), self._split(v), attn_mask=mask, dropout_p=p
+        )
         return self.to_out(out.transpose(1, 2).reshape(b, q.shape[1], -1))
 
 
@@ -156,8 +167,19 @@ class Transformer(nn.Module):
     """Goal-conditioned stack: ``forward(x (B, T*P, dim), g (B, P', dim)) -> (B, T, dim)``
     (``(B, 1, dim)`` for 0.0.3's ``pool_type="token"``); see the module docstring."""
 
-    def __init__(self, dim: int, depth: int, heads: int, dim_head: int, mlp_dim: int, dropout: float = 0.0,
-                 num_patches: int = 1, num_frames: int = 1, causal: bool = True, pool_type: str = "attention"):
+    def __init__(
+        self,
+        dim: int,
+        depth: int,
+        heads: int,
+        dim_head: int,
+        mlp_dim: int,
+        dropout: float = 0.0,
+        num_patches: int = 1,
+        num_frames: int = 1,
+        causal: bool = True,
+        pool_type: str = "attention",
+    ):
         super().__init__()
         if pool_type not in POOL_TYPES:
             raise ConfigError(f"{type(self).__name__} requires pool_type in {POOL_TYPES[:2]}, got {pool_type!r}")
@@ -165,7 +187,12 @@ class Transformer(nn.Module):
         self.norm = nn.LayerNorm(dim)
         self.kinds = [self._kind(i, depth) for i in range(depth)]
         self.layers = nn.ModuleList(
-            nn.ModuleList([Attention(dim, heads, dim_head, dropout, num_patches, num_frames, kind, causal), FeedForward(dim, mlp_dim, dropout)])
+            nn.ModuleList(
+                [
+                    Attention(dim, heads, dim_head, dropout, num_patches, num_frames, kind, causal),
+                    FeedForward(dim, mlp_dim, dropout),
+                ]
+            )
             for kind in self.kinds
         )
 
@@ -190,8 +217,18 @@ class Transformer(nn.Module):
 class SelfAttentionTransformer(Transformer):
     """Self-attention only, last layer a frame aggregation: ``forward(x (B, T*P, dim)) -> (B, T, dim)``."""
 
-    def __init__(self, dim: int, depth: int, heads: int, dim_head: int, mlp_dim: int, dropout: float = 0.0,
-                 num_patches: int = 1, num_frames: int = 1, causal: bool = True):
+    def __init__(
+        self,
+        dim: int,
+        depth: int,
+        heads: int,
+        dim_head: int,
+        mlp_dim: int,
+        dropout: float = 0.0,
+        num_patches: int = 1,
+        num_frames: int = 1,
+        causal: bool = True,
+    ):
         super().__init__(dim, depth, heads, dim_head, mlp_dim, dropout, num_patches, num_frames, causal, "attention")
 
     def _kind(self, i: int, depth: int) -> str:
@@ -228,10 +265,26 @@ class Predictor(_Positional):
     """Goal-conditioned head: ``forward(x (B, T*P, dim), g (B, P, dim)) -> (B, T, out_dim)``
     (the action means of a policy, or a value with ``out_dim=1``)."""
 
-    def __init__(self, *, num_patches: int, num_frames: int, dim: int, depth: int, heads: int, mlp_dim: int, out_dim: int,
-                 dim_head: int = 64, dropout: float = 0.0, emb_dropout: float = 0.0, causal: bool = True, pool_type: str = "attention"):
+    def __init__(
+        self,
+        *,
+        num_patches: int,
+        num_frames: int,
+        dim: int,
+        depth: int,
+        heads: int,
+        mlp_dim: int,
+        out_dim: int,
+        dim_head: int = 64,
+        dropout: float = 0.0,
+        emb_dropout: float = 0.0,
+        causal: bool = True,
+        pool_type: str = "attention",
+    ):
         super().__init__(num_patches, num_frames, dim, emb_dropout)
-        self.transformer = Transformer(dim, depth, heads, dim_head, mlp_dim, dropout, num_patches, num_frames, causal, pool_type)
+        self.transformer = Transformer(
+            dim, depth, heads, dim_head, mlp_dim, dropout, num_patches, num_frames, causal, pool_type
+        )
         self.out_proj = nn.Linear(dim, out_dim)
 
     def forward(self, x: torch.Tensor, g: torch.Tensor) -> torch.Tensor:
@@ -244,13 +297,33 @@ class QPredictor(_Positional):
     g (B, P, dim)) -> (B, T, 1)``; the action joins the frame embeddings in an MLP head
     (``q_head``: two ReLU layers of ``q_hidden_dim``)."""
 
-    def __init__(self, *, num_patches: int, num_frames: int, dim: int, depth: int, heads: int, mlp_dim: int, action_dim: int,
-                 q_hidden_dim: int = 256, dim_head: int = 64, dropout: float = 0.0, emb_dropout: float = 0.0, causal: bool = True,
-                 pool_type: str = "attention"):
+    def __init__(
+        self,
+        *,
+        num_patches: int,
+        num_frames: int,
+        dim: int,
+        depth: int,
+        heads: int,
+        mlp_dim: int,
+        action_dim: int,
+        q_hidden_dim: int = 256,
+        dim_head: int = 64,
+        dropout: float = 0.0,
+        emb_dropout: float = 0.0,
+        causal: bool = True,
+        pool_type: str = "attention",
+    ):
         super().__init__(num_patches, num_frames, dim, emb_dropout)
-        self.transformer = Transformer(dim, depth, heads, dim_head, mlp_dim, dropout, num_patches, num_frames, causal, pool_type)
+        self.transformer = Transformer(
+            dim, depth, heads, dim_head, mlp_dim, dropout, num_patches, num_frames, causal, pool_type
+        )
         self.q_head = nn.Sequential(
-            nn.Linear(dim + action_dim, q_hidden_dim), nn.ReLU(), nn.Linear(q_hidden_dim, q_hidden_dim), nn.ReLU(), nn.Linear(q_hidden_dim, 1)
+            nn.Linear(dim + action_dim, q_hidden_dim),
+            nn.ReLU(),
+            nn.Linear(q_hidden_dim, q_hidden_dim),
+            nn.ReLU(),
+            nn.Linear(q_hidden_dim, 1),
         )
 
     def forward(self, x: torch.Tensor, a: torch.Tensor, g: torch.Tensor) -> torch.Tensor:
@@ -265,11 +338,26 @@ class MetricValuePredictor(_Positional):
     As upstream, the goal is placed with the observation positions (``pos_embedding_goal``
     is kept for the state dict only)."""
 
-    def __init__(self, *, num_patches: int, num_frames: int, dim: int, depth: int, heads: int, mlp_dim: int, embed_dim: int = 64,
-                 dim_head: int = 64, dropout: float = 0.0, emb_dropout: float = 0.0, causal: bool = True):
+    def __init__(
+        self,
+        *,
+        num_patches: int,
+        num_frames: int,
+        dim: int,
+        depth: int,
+        heads: int,
+        mlp_dim: int,
+        embed_dim: int = 64,
+        dim_head: int = 64,
+        dropout: float = 0.0,
+        emb_dropout: float = 0.0,
+        causal: bool = True,
+    ):
         super().__init__(num_patches, num_frames, dim, emb_dropout)
         self.embed_dim = embed_dim
-        self.transformer = SelfAttentionTransformer(dim, depth, heads, dim_head, mlp_dim, dropout, num_patches, num_frames, causal)
+        self.transformer = SelfAttentionTransformer(
+            dim, depth, heads, dim_head, mlp_dim, dropout, num_patches, num_frames, causal
+        )
         self.embed_proj = nn.Linear(dim, embed_dim)
 
     def encode(self, x: torch.Tensor) -> torch.Tensor:
@@ -319,10 +407,18 @@ class TeacherStudentWrapper(nn.Module):
     the student; coefficients 0 make the teacher the student itself. ``forward`` runs the teacher.
     """
 
-    def __init__(self, student: nn.Module, warm_init: bool = True, base_ema_coefficient: float = 0.996,
-                 final_ema_coefficient: float = 1.0):
+    def __init__(
+        self,
+        student: nn.Module,
+        warm_init: bool = True,
+        base_ema_coefficient: float = 0.996,
+        final_ema_coefficient: float = 1.0,
+    ):
         super().__init__()
-        for name, value in (("base_ema_coefficient", base_ema_coefficient), ("final_ema_coefficient", final_ema_coefficient)):
+        for name, value in (
+            ("base_ema_coefficient", base_ema_coefficient),
+            ("final_ema_coefficient", final_ema_coefficient),
+        ):
             if not 0.0 <= float(value) <= 1.0:
                 raise ConfigError(f"TeacherStudentWrapper requires {name} in [0, 1], got {value!r}")
         self.student = student

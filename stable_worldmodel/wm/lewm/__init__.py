@@ -4,4 +4,7 @@
 from ..._lazy import lazy_getattr
 
 __all__ = ["LeWM", "MLP", "Embedder", "Predictor", "LeWMConfig"]
-__getattr__ = lazy_getattr(__name__, {"LeWM": ".lewm", "MLP": ".module", "Embedder": ".module", "Predictor": ".module", "LeWMConfig": ".config"})
+__getattr__ = lazy_getattr(
+    __name__,
+    {"LeWM": ".lewm", "MLP": ".module", "Embedder": ".module", "Predictor": ".module", "LeWMConfig": ".config"},
+)

@@ -28,15 +28,40 @@ class LeWMConfig(JEPAConfig):
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "tiny": {"sigreg_num_proj": 256, "sigreg_weight": 0.01},
         "small": {
-            "encoder": "vit", "vit_size": "tiny", "patch_size": 8, "vit_overrides": {"num_hidden_layers": 6},
-            "embed_dim": 192, "depth": 4, "heads": 8, "dim_head": 32, "mlp_dim": 768, "projector_hidden": 1024,
-            "image_mean": IMAGENET_MEAN, "image_std": IMAGENET_STD, "batch_size": 128, "lr": 3e-4, "steps": 20000,
+            "encoder": "vit",
+            "vit_size": "tiny",
+            "patch_size": 8,
+            "vit_overrides": {"num_hidden_layers": 6},
+            "embed_dim": 192,
+            "depth": 4,
+            "heads": 8,
+            "dim_head": 32,
+            "mlp_dim": 768,
+            "projector_hidden": 1024,
+            "image_mean": IMAGENET_MEAN,
+            "image_std": IMAGENET_STD,
+            "batch_size": 128,
+            "lr": 3e-4,
+            "steps": 20000,
         },
         "paper": {
-            "encoder": "vit", "vit_size": "tiny", "patch_size": 14, "image_size": 224, "embed_dim": 192,
-            "depth": 6, "heads": 16, "dim_head": 64, "mlp_dim": 2048, "dropout": 0.1, "projector_hidden": 2048,
-            "image_mean": IMAGENET_MEAN, "image_std": IMAGENET_STD, "batch_size": 128, "lr": 5e-5,
-            "warmup_steps": 1000, "steps": 100000,
+            "encoder": "vit",
+            "vit_size": "tiny",
+            "patch_size": 14,
+            "image_size": 224,
+            "embed_dim": 192,
+            "depth": 6,
+            "heads": 16,
+            "dim_head": 64,
+            "mlp_dim": 2048,
+            "dropout": 0.1,
+            "projector_hidden": 2048,
+            "image_mean": IMAGENET_MEAN,
+            "image_std": IMAGENET_STD,
+            "batch_size": 128,
+            "lr": 5e-5,
+            "warmup_steps": 1000,
+            "steps": 100000,
         },
     }
 
@@ -44,4 +69,8 @@ class LeWMConfig(JEPAConfig):
     sigreg_num_proj: int = 1024
 
     def model_kwargs(self, action_dim: int) -> dict[str, Any]:
-        return {**super().model_kwargs(action_dim), "sigreg_weight": self.sigreg_weight, "sigreg_num_proj": self.sigreg_num_proj}
+        return {
+            **super().model_kwargs(action_dim),
+            "sigreg_weight": self.sigreg_weight,
+            "sigreg_num_proj": self.sigreg_num_proj,
+        }

@@ -59,4 +59,9 @@ class LeWM(JEPA):
         out, pred_loss = self._teacher_forcing(batch, self.loss_history, self.num_preds)
         emb = out["emb"]
         sigreg = self._sigreg_on(emb.device)(emb.transpose(0, 1))
-        return {"loss": pred_loss + self.sigreg_weight * sigreg, "pred_loss": pred_loss, "sigreg_loss": sigreg, "emb": emb}
+        return {
+            "loss": pred_loss + self.sigreg_weight * sigreg,
+            "pred_loss": pred_loss,
+            "sigreg_loss": sigreg,
+            "emb": emb,
+        }

@@ -63,7 +63,9 @@ class Attention(nn.Module):
             inner = self.heads * self.dim_head
             return self.to_out(F.linear(self.norm(x), self.to_qkv.weight[2 * inner :]))
         q, k, v = self.to_qkv(self.norm(x)).chunk(3, dim=-1)
-        out = F.scaled_dot_product_attention(self._heads(q), self._heads(k), self._heads(v), dropout_p=p, is_causal=causal)
+        out = F.scaled_dot_product_attention(
+            self._heads(q), self._heads(k), self._heads(v), dropout_p=p, is_causal=causal
+        )
         return self.to_out(out.transpose(1, 2).reshape(b, t, self.heads * self.dim_head))
 
 
@@ -170,7 +172,15 @@ class Predictor(nn.Module):
         self.pos_embedding = nn.Parameter(torch.randn(1, num_frames, input_dim))
         self.dropout = nn.Dropout(emb_dropout)
         self.transformer = Transformer(
-            input_dim, hidden_dim, self.output_dim, depth, heads, dim_head, mlp_dim, dropout, block_class=ConditionalBlock
+            input_dim,
+            hidden_dim,
+            self.output_dim,
+            depth,
+            heads,
+            dim_head,
+            mlp_dim,
+            dropout,
+            block_class=ConditionalBlock,
         )
 
     def forward(self, x: torch.Tensor, c: torch.Tensor) -> torch.Tensor:

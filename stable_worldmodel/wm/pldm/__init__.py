@@ -3,4 +3,7 @@
 from ..._lazy import lazy_getattr
 
 __all__ = ["PLDM", "MLP", "Embedder", "Predictor", "PLDMConfig"]
-__getattr__ = lazy_getattr(__name__, {"PLDM": ".pldm", "MLP": ".module", "Embedder": ".module", "Predictor": ".module", "PLDMConfig": ".config"})
+__getattr__ = lazy_getattr(
+    __name__,
+    {"PLDM": ".pldm", "MLP": ".module", "Embedder": ".module", "Predictor": ".module", "PLDMConfig": ".config"},
+)

@@ -21,16 +21,42 @@ class PLDMConfig(JEPAConfig):
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "tiny": {},
         "small": {
-            "encoder": "vit", "vit_size": "tiny", "patch_size": 8, "vit_overrides": {"num_hidden_layers": 6},
-            "embed_dim": 192, "depth": 4, "heads": 8, "dim_head": 32, "mlp_dim": 768, "projector_hidden": 1024,
-            "image_mean": IMAGENET_MEAN, "image_std": IMAGENET_STD, "batch_size": 128, "lr": 3e-4, "steps": 20000,
+            "encoder": "vit",
+            "vit_size": "tiny",
+            "patch_size": 8,
+            "vit_overrides": {"num_hidden_layers": 6},
+            "embed_dim": 192,
+            "depth": 4,
+            "heads": 8,
+            "dim_head": 32,
+            "mlp_dim": 768,
+            "projector_hidden": 1024,
+            "image_mean": IMAGENET_MEAN,
+            "image_std": IMAGENET_STD,
+            "batch_size": 128,
+            "lr": 3e-4,
+            "steps": 20000,
             "idm_hidden": 512,
         },
         "paper": {
-            "encoder": "vit", "vit_size": "tiny", "patch_size": 14, "image_size": 224, "embed_dim": 192,
-            "depth": 6, "heads": 16, "dim_head": 64, "mlp_dim": 2048, "dropout": 0.1, "projector_hidden": 2048,
-            "image_mean": IMAGENET_MEAN, "image_std": IMAGENET_STD, "batch_size": 128, "lr": 5e-5,
-            "warmup_steps": 1000, "steps": 100000, "idm_hidden": 512,
+            "encoder": "vit",
+            "vit_size": "tiny",
+            "patch_size": 14,
+            "image_size": 224,
+            "embed_dim": 192,
+            "depth": 6,
+            "heads": 16,
+            "dim_head": 64,
+            "mlp_dim": 2048,
+            "dropout": 0.1,
+            "projector_hidden": 2048,
+            "image_mean": IMAGENET_MEAN,
+            "image_std": IMAGENET_STD,
+            "batch_size": 128,
+            "lr": 5e-5,
+            "warmup_steps": 1000,
+            "steps": 100000,
+            "idm_hidden": 512,
         },
     }
 
@@ -40,7 +66,9 @@ class PLDMConfig(JEPAConfig):
     def target_tree(self, action_dim: int) -> dict[str, Any]:
         tree = super().target_tree(action_dim)
         if self.idm_hidden:
-            tree["idm"] = self._mlp(2 * self.embed_dim, self.frameskip * int(action_dim), self.idm_hidden, batchnorm=False)
+            tree["idm"] = self._mlp(
+                2 * self.embed_dim, self.frameskip * int(action_dim), self.idm_hidden, batchnorm=False
+            )
         return tree
 
     def model_kwargs(self, action_dim: int) -> dict[str, Any]:

@@ -56,7 +56,9 @@ class PLDM(JEPA):
             self.idm = idm
         unknown = set(loss_weights or {}) - set(DEFAULT_LOSS_WEIGHTS)
         if unknown:
-            raise ConfigError(f"PLDM requires loss_weights keys among {sorted(DEFAULT_LOSS_WEIGHTS)}, got {sorted(unknown)}")
+            raise ConfigError(
+                f"PLDM requires loss_weights keys among {sorted(DEFAULT_LOSS_WEIGHTS)}, got {sorted(unknown)}"
+            )
         self.loss_weights = {**DEFAULT_LOSS_WEIGHTS, **dict(loss_weights or {})}
         self.num_preds, self.loss_history = int(num_preds), history_size
         self.pldm_loss = _Unregistered(PLDMLoss())

@@ -5,9 +5,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
+from ... import keys
 from ...errors import ConfigError
 from ..backbones import BACKBONES, LOCAL_FAMILIES, backbone_spec
-from ... import keys
 from ..base import check_positive_int
 from ..config import IMAGENET_MEAN, IMAGENET_STD, PredictorConfig
 
@@ -49,19 +49,51 @@ class PreJEPAConfig(PredictorConfig):
     target: ClassVar[str] = f"{_P}.prejepa.PreJEPA"
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "tiny": {
-            "backbone": "cnn_aa", "pretrained": False, "image_size": 64, "cnn_width": 16, "embed_dim": 64, "cnn_grid": 2,
-            "depth": 2, "heads": 4, "dim_head": 16, "mlp_dim": 128, "batch_size": 32, "lr": 1e-3, "warmup_steps": 50,
-            "steps": 1000, "history_size": 1,
+            "backbone": "cnn_aa",
+            "pretrained": False,
+            "image_size": 64,
+            "cnn_width": 16,
+            "embed_dim": 64,
+            "cnn_grid": 2,
+            "depth": 2,
+            "heads": 4,
+            "dim_head": 16,
+            "mlp_dim": 128,
+            "batch_size": 32,
+            "lr": 1e-3,
+            "warmup_steps": 50,
+            "steps": 1000,
+            "history_size": 1,
         },
         "small": {
-            "backbone": "dinov2_small", "pretrained": True, "image_size": 112, "depth": 4, "heads": 8, "dim_head": 32,
-            "mlp_dim": 1024, "image_mean": IMAGENET_MEAN, "image_std": IMAGENET_STD, "batch_size": 64, "lr": 5e-4,
+            "backbone": "dinov2_small",
+            "pretrained": True,
+            "image_size": 112,
+            "depth": 4,
+            "heads": 8,
+            "dim_head": 32,
+            "mlp_dim": 1024,
+            "image_mean": IMAGENET_MEAN,
+            "image_std": IMAGENET_STD,
+            "batch_size": 64,
+            "lr": 5e-4,
             "steps": 20000,
         },
         "paper": {
-            "backbone": "dinov2_small", "pretrained": True, "image_size": 224, "depth": 6, "heads": 16, "dim_head": 64,
-            "mlp_dim": 2048, "dropout": 0.1, "image_mean": IMAGENET_MEAN, "image_std": IMAGENET_STD, "batch_size": 32,
-            "lr": 5e-4, "warmup_steps": 1000, "steps": 100000,
+            "backbone": "dinov2_small",
+            "pretrained": True,
+            "image_size": 224,
+            "depth": 6,
+            "heads": 16,
+            "dim_head": 64,
+            "mlp_dim": 2048,
+            "dropout": 0.1,
+            "image_mean": IMAGENET_MEAN,
+            "image_std": IMAGENET_STD,
+            "batch_size": 32,
+            "lr": 5e-4,
+            "warmup_steps": 1000,
+            "steps": 100000,
         },
     }
 
@@ -96,12 +128,18 @@ class PreJEPAConfig(PredictorConfig):
             raise ConfigError(f"{name} requires pretrained to be a bool, got {self.pretrained!r}")
         local = backbone_spec(self.backbone).family in LOCAL_FAMILIES
         if local and self.pretrained:
-            raise ConfigError(f"{name} requires pretrained=False with backbone {self.backbone!r} (it has no pretrained weights), got True")
+            raise ConfigError(
+                f"{name} requires pretrained=False with backbone {self.backbone!r} (it has no pretrained weights), got True"
+            )
         if self.backbone == "blur" and self.image_size % (self.blur_pool * self.cnn_grid):
-            raise ConfigError(f"{name} requires image_size divisible by blur_pool * cnn_grid with backbone 'blur', got "
-                              f"image_size={self.image_size}, blur_pool={self.blur_pool}, cnn_grid={self.cnn_grid}")
+            raise ConfigError(
+                f"{name} requires image_size divisible by blur_pool * cnn_grid with backbone 'blur', got "
+                f"image_size={self.image_size}, blur_pool={self.blur_pool}, cnn_grid={self.cnn_grid}"
+            )
         if not local and self.image_size < self.backbone_patch:
-            raise ConfigError(f"{name} requires image_size >= the backbone's patch size {self.backbone_patch}, got {self.image_size}")
+            raise ConfigError(
+                f"{name} requires image_size >= the backbone's patch size {self.backbone_patch}, got {self.image_size}"
+            )
 
     @property
     def extra_columns(self) -> dict[str, int]:
@@ -144,13 +182,28 @@ class PreJEPAConfig(PredictorConfig):
     # -- the model as a _target_ tree -----------------------------------------------------------
     def encoder_tree(self) -> dict[str, Any]:
         if self.backbone in ("cnn", "cnn_aa"):
-            backbone = {"name": self.backbone, "image_size": self.image_size, "width": self.cnn_width,
-                        "hidden_size": self.embed_dim, "grid": self.cnn_grid}
+            backbone = {
+                "name": self.backbone,
+                "image_size": self.image_size,
+                "width": self.cnn_width,
+                "hidden_size": self.embed_dim,
+                "grid": self.cnn_grid,
+            }
         elif self.backbone == "blur":
-            backbone = {"name": "blur", "image_size": self.image_size, "sigma": float(self.blur_sigma), "pool": self.blur_pool,
-                        "grid": self.cnn_grid}
+            backbone = {
+                "name": "blur",
+                "image_size": self.image_size,
+                "sigma": float(self.blur_sigma),
+                "pool": self.blur_pool,
+                "grid": self.cnn_grid,
+            }
         else:
-            backbone = {"name": self.backbone, "path": self.backbone_path, "pretrained": self.pretrained, **self.backbone_overrides}
+            backbone = {
+                "name": self.backbone,
+                "path": self.backbone_path,
+                "pretrained": self.pretrained,
+                **self.backbone_overrides,
+            }
         frozen = {"_target_": f"{_P}.backbones.create_backbone", **backbone}
         return {"_target_": f"{_P}.gcrl.module.EvalOnly", "backbone": frozen}
 
@@ -159,7 +212,11 @@ class PreJEPAConfig(PredictorConfig):
         extras: dict[str, Any] = {}
         if self.proprio_dim:
             extras["proprio"] = {"_target_": _EMBEDDER, "in_chans": self.proprio_dim, "emb_dim": self.proprio_emb_dim}
-        extras["action"] = {"_target_": _EMBEDDER, "in_chans": self.frameskip * int(action_dim), "emb_dim": self.action_emb_dim}
+        extras["action"] = {
+            "_target_": _EMBEDDER,
+            "in_chans": self.frameskip * int(action_dim),
+            "emb_dim": self.action_emb_dim,
+        }
         dim = self.encoder_dim + sum(e["emb_dim"] for e in extras.values())
         return {
             "_target_": self.target,
@@ -174,5 +231,6 @@ class PreJEPAConfig(PredictorConfig):
             "extra_encoders": extras,
             "history_size": self.history_size,
             "num_pred": self.num_preds,
-            "interpolate_pos_encoding": self.interpolate_pos_encoding and backbone_spec(self.backbone).family != "resnet",
+            "interpolate_pos_encoding": self.interpolate_pos_encoding
+            and backbone_spec(self.backbone).family != "resnet",
         }

@@ -27,7 +27,18 @@ from ..backbones import create_backbone  # noqa: F401  (upstream's configs name 
 from ..encoders import EncoderOutput
 from ..lewm.module import FeedForward
 
-__all__ = ["AntialiasedPatchCNN", "Attention", "BlurPatchEncoder", "CausalPredictor", "Embedder", "create_backbone", "FeedForward", "PatchConvEncoder", "Transformer", "frame_causal_mask"]
+__all__ = [
+    "AntialiasedPatchCNN",
+    "Attention",
+    "BlurPatchEncoder",
+    "CausalPredictor",
+    "Embedder",
+    "create_backbone",
+    "FeedForward",
+    "PatchConvEncoder",
+    "Transformer",
+    "frame_causal_mask",
+]
 
 
 def frame_causal_mask(num_patches: int, num_frames: int) -> torch.Tensor:
@@ -43,7 +54,12 @@ class Embedder(nn.Module):
 
     def __init__(self, num_frames: int = 1, tubelet_size: int = 1, in_chans: int = 8, emb_dim: int = 10):
         super().__init__()
-        for key, value in (("num_frames", num_frames), ("tubelet_size", tubelet_size), ("in_chans", in_chans), ("emb_dim", emb_dim)):
+        for key, value in (
+            ("num_frames", num_frames),
+            ("tubelet_size", tubelet_size),
+            ("in_chans", in_chans),
+            ("emb_dim", emb_dim),
+        ):
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ConfigError(f"Embedder requires {key} to be a positive int, got {value!r}")
         self.num_frames, self.tubelet_size, self.in_chans, self.emb_dim = num_frames, tubelet_size, in_chans, emb_dim
@@ -63,7 +79,15 @@ class Attention(nn.Module):
     """Pre-norm multi-head self-attention under the frame-causal mask (buffer ``bias``,
     upstream's name; it is part of the state dict)."""
 
-    def __init__(self, dim: int, heads: int = 8, dim_head: int = 64, dropout: float = 0.0, num_patches: int = 1, num_frames: int = 1):
+    def __init__(
+        self,
+        dim: int,
+        heads: int = 8,
+        dim_head: int = 64,
+        dropout: float = 0.0,
+        num_patches: int = 1,
+        num_frames: int = 1,
+    ):
         super().__init__()
         inner = heads * dim_head
         self.heads, self.dim_head = heads, dim_head
@@ -79,7 +103,9 @@ class Attention(nn.Module):
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         b, n, _ = x.shape
-        q, k, v = (t.view(b, n, self.heads, self.dim_head).transpose(1, 2) for t in self.to_qkv(self.norm(x)).chunk(3, dim=-1))
+        q, k, v = (
+            t.view(b, n, self.heads, self.dim_head).transpose(1, 2) for t in self.to_qkv(self.norm(x)).chunk(3, dim=-1)
+        )
         mask = self.bias[:, :, :n, :n] > 0.5
         p = self.dropout.p if self.training else 0.0
         out = F.scaled_dot_product_attention(q, k, v, attn_mask=mask, dropout_p=p)
@@ -90,12 +116,23 @@ class Transformer(nn.Module):
     """``depth`` residual (attention, MLP) pairs, then a LayerNorm. ``layers[i]`` is a
     ``ModuleList([Attention, FeedForward])`` (upstream's state-dict layout)."""
 
-    def __init__(self, dim: int, depth: int, heads: int, dim_head: int, mlp_dim: int, dropout: float = 0.0,
-                 num_patches: int = 1, num_frames: int = 1):
+    def __init__(
+        self,
+        dim: int,
+        depth: int,
+        heads: int,
+        dim_head: int,
+        mlp_dim: int,
+        dropout: float = 0.0,
+        num_patches: int = 1,
+        num_frames: int = 1,
+    ):
         super().__init__()
         self.norm = nn.LayerNorm(dim)
         self.layers = nn.ModuleList(
-            nn.ModuleList([Attention(dim, heads, dim_head, dropout, num_patches, num_frames), FeedForward(dim, mlp_dim, dropout)])
+            nn.ModuleList(
+                [Attention(dim, heads, dim_head, dropout, num_patches, num_frames), FeedForward(dim, mlp_dim, dropout)]
+            )
             for _ in range(depth)
         )
 
@@ -114,13 +151,33 @@ class CausalPredictor(nn.Module):
     predict frame ``t + 1`` from frames ``<= t``. Learned positions cover ``num_frames * num_patches`` tokens.
     """
 
-    def __init__(self, *, num_patches: int, num_frames: int, dim: int, depth: int, heads: int, mlp_dim: int,
-                 pool: str = "cls", dim_head: int = 64, dropout: float = 0.0, emb_dropout: float = 0.0, **kwargs: Any):
+    def __init__(
+        self,
+        *,
+        num_patches: int,
+        num_frames: int,
+        dim: int,
+        depth: int,
+        heads: int,
+        mlp_dim: int,
+        pool: str = "cls",
+        dim_head: int = 64,
+        dropout: float = 0.0,
+        emb_dropout: float = 0.0,
+        **kwargs: Any,
+    ):
         super().__init__()
         if pool not in ("cls", "mean"):
             raise ConfigError(f"CausalPredictor requires pool 'cls' or 'mean', got {pool!r}")
-        for key, value in (("num_patches", num_patches), ("num_frames", num_frames), ("dim", dim), ("depth", depth),
-                           ("heads", heads), ("mlp_dim", mlp_dim), ("dim_head", dim_head)):
+        for key, value in (
+            ("num_patches", num_patches),
+            ("num_frames", num_frames),
+            ("dim", dim),
+            ("depth", depth),
+            ("heads", heads),
+            ("mlp_dim", mlp_dim),
+            ("dim_head", dim_head),
+        ):
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ConfigError(f"CausalPredictor requires {key} to be a positive int, got {value!r}")
         self.num_patches, self.num_frames, self.pool = num_patches, num_frames, pool
@@ -157,8 +214,10 @@ def _check_images(owner: str, pixels: torch.Tensor, config: Any) -> None:
     """SpaceError unless ``pixels`` is ``(N, config.num_channels, config.image_size, config.image_size)``."""
     size, c = config.image_size, config.num_channels
     if pixels.ndim != 4 or pixels.shape[1] != c or tuple(pixels.shape[-2:]) != (size, size):
-        raise SpaceError(f"{owner} requires images (N, {c}, {size}, {size}), got {tuple(pixels.shape)}; "
-                         "resize them to the model's image_size")
+        raise SpaceError(
+            f"{owner} requires images (N, {c}, {size}, {size}), got {tuple(pixels.shape)}; "
+            "resize them to the model's image_size"
+        )
 
 
 class PatchConvEncoder(nn.Module):
@@ -170,12 +229,22 @@ class PatchConvEncoder(nn.Module):
     ``4 * width``) until the map is ``grid`` x ``grid``, then a 1x1 conv to ``hidden_size``.
     """
 
-    def __init__(self, image_size: int = 64, in_channels: int = 3, width: int = 16, hidden_size: int = 32, grid: int = 4):
+    def __init__(
+        self, image_size: int = 64, in_channels: int = 3, width: int = 16, hidden_size: int = 32, grid: int = 4
+    ):
         super().__init__()
-        _positive_ints("PatchConvEncoder", image_size=image_size, in_channels=in_channels, width=width,
-                       hidden_size=hidden_size, grid=grid)
+        _positive_ints(
+            "PatchConvEncoder",
+            image_size=image_size,
+            in_channels=in_channels,
+            width=width,
+            hidden_size=hidden_size,
+            grid=grid,
+        )
         stages = _halvings("PatchConvEncoder", image_size, grid)
-        self.config = SimpleNamespace(image_size=image_size, num_channels=in_channels, hidden_size=hidden_size, grid=grid, width=width)
+        self.config = SimpleNamespace(
+            image_size=image_size, num_channels=in_channels, hidden_size=hidden_size, grid=grid, width=width
+        )
         layers: list[nn.Module] = []
         channels = in_channels
         for i in range(stages):
@@ -223,7 +292,9 @@ class _StandardizedTokens(nn.Module):
         standard deviation of each value, at least ``floor`` x the largest one (values the
         frames never change stay near 0 instead of blowing up)."""
         if pixels.ndim != 4 or len(pixels) < 2:
-            raise SpaceError(f"{type(self).__name__}.fit_to_frames requires at least 2 frames (N, C, H, W), got {tuple(pixels.shape)}")
+            raise SpaceError(
+                f"{type(self).__name__}.fit_to_frames requires at least 2 frames (N, C, H, W), got {tuple(pixels.shape)}"
+            )
         _check_images(type(self).__name__, pixels[:1], self.config)
         tokens = torch.cat([self._tokens(pixels[i : i + 512]) for i in range(0, len(pixels), 512)])
         std = tokens.std(0)
@@ -253,16 +324,24 @@ class BlurPatchEncoder(_StandardizedTokens):
         if isinstance(sigma, bool) or not isinstance(sigma, (int, float)) or sigma < 0:
             raise ConfigError(f"BlurPatchEncoder requires sigma >= 0 (pixels; 0: image_size / 8), got {sigma!r}")
         if image_size % (pool * grid):
-            raise ConfigError(f"BlurPatchEncoder requires image_size divisible by pool * grid, got image_size={image_size}, "
-                              f"pool={pool}, grid={grid}")
+            raise ConfigError(
+                f"BlurPatchEncoder requires image_size divisible by pool * grid, got image_size={image_size}, "
+                f"pool={pool}, grid={grid}"
+            )
         sigma = float(sigma) or image_size / 8
         radius = max(1, int(round(3 * sigma)))
-        taps = torch.exp(-torch.arange(-radius, radius + 1, dtype=torch.float32) ** 2 / (2 * sigma**2))
+        taps = torch.exp(-(torch.arange(-radius, radius + 1, dtype=torch.float32) ** 2) / (2 * sigma**2))
         self.register_buffer("taps", taps / taps.sum(), persistent=False)  # a function of the config: not in state_dict
         cell = image_size // (pool * grid)
         self._init_standardization(grid * grid, in_channels * cell * cell)
-        self.config = SimpleNamespace(image_size=image_size, num_channels=in_channels, hidden_size=in_channels * cell * cell,
-                                      grid=grid, pool=pool, sigma=sigma)
+        self.config = SimpleNamespace(
+            image_size=image_size,
+            num_channels=in_channels,
+            hidden_size=in_channels * cell * cell,
+            grid=grid,
+            pool=pool,
+            sigma=sigma,
+        )
 
     def _tokens(self, pixels: torch.Tensor) -> torch.Tensor:
         """Unstandardized patch tokens ``(N, grid**2, D)``."""
@@ -273,7 +352,6 @@ class BlurPatchEncoder(_StandardizedTokens):
         x = F.avg_pool2d(x, self.config.pool)  # (N, C, S, S)
         n, cell = x.shape[0], x.shape[-1] // grid
         return x.reshape(n, c, grid, cell, grid, cell).permute(0, 2, 4, 1, 3, 5).reshape(n, grid * grid, -1)
-
 
 
 def binomial_taps(size: int) -> torch.Tensor:
@@ -308,17 +386,43 @@ class AntialiasedPatchCNN(_StandardizedTokens):
     and differ only in what they train.
     """
 
-    def __init__(self, image_size: int = 64, in_channels: int = 3, width: int = 16, hidden_size: int = 32, grid: int = 2,
-                 taps: int = 5, seed: int | None = 0):
+    def __init__(
+        self,
+        image_size: int = 64,
+        in_channels: int = 3,
+        width: int = 16,
+        hidden_size: int = 32,
+        grid: int = 2,
+        taps: int = 5,
+        seed: int | None = 0,
+    ):
         super().__init__()
-        _positive_ints("AntialiasedPatchCNN", image_size=image_size, in_channels=in_channels, width=width,
-                       hidden_size=hidden_size, grid=grid, taps=taps)
+        _positive_ints(
+            "AntialiasedPatchCNN",
+            image_size=image_size,
+            in_channels=in_channels,
+            width=width,
+            hidden_size=hidden_size,
+            grid=grid,
+            taps=taps,
+        )
         if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int) or seed < 0):
-            raise ConfigError(f"AntialiasedPatchCNN requires seed to be an int >= 0 or None (the global RNG), got {seed!r}")
+            raise ConfigError(
+                f"AntialiasedPatchCNN requires seed to be an int >= 0 or None (the global RNG), got {seed!r}"
+            )
         stages = _halvings("AntialiasedPatchCNN", image_size, grid)
-        self.config = SimpleNamespace(image_size=image_size, num_channels=in_channels, hidden_size=hidden_size, grid=grid,
-                                      width=width, taps=taps, seed=seed)
-        self.register_buffer("taps", binomial_taps(taps), persistent=False)  # a function of the config: not in state_dict
+        self.config = SimpleNamespace(
+            image_size=image_size,
+            num_channels=in_channels,
+            hidden_size=hidden_size,
+            grid=grid,
+            width=width,
+            taps=taps,
+            seed=seed,
+        )
+        self.register_buffer(
+            "taps", binomial_taps(taps), persistent=False
+        )  # a function of the config: not in state_dict
         self.stages = nn.ModuleList()
         with torch.random.fork_rng(devices=[]):  # the weights are a function of the config, whatever the caller's RNG
             if seed is not None:
@@ -326,7 +430,11 @@ class AntialiasedPatchCNN(_StandardizedTokens):
             channels = in_channels
             for i in range(stages):
                 out = width * min(2**i, 4)
-                self.stages.append(nn.Sequential(nn.Conv2d(channels, out, 3, padding=1), nn.GroupNorm(max(1, out // 8), out), nn.GELU()))
+                self.stages.append(
+                    nn.Sequential(
+                        nn.Conv2d(channels, out, 3, padding=1), nn.GroupNorm(max(1, out // 8), out), nn.GELU()
+                    )
+                )
                 channels = out
             self.head = nn.Conv2d(channels, hidden_size, 1)
         self._init_standardization(grid * grid, hidden_size)

@@ -73,10 +73,14 @@ class PreJEPA(nn.Module):
         for key, value in (("history_size", history_size), ("num_pred", num_pred)):
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ConfigError(f"PreJEPA requires {key} to be a positive int, got {value!r}")
-        extra = extra_encoders if isinstance(extra_encoders, nn.ModuleDict) else nn.ModuleDict(dict(extra_encoders or {}))
+        extra = (
+            extra_encoders if isinstance(extra_encoders, nn.ModuleDict) else nn.ModuleDict(dict(extra_encoders or {}))
+        )
         for key, module in extra.items():
             if not isinstance(getattr(module, "emb_dim", None), int):
-                raise ConfigError(f"PreJEPA requires every extra encoder to have an int emb_dim, got {type(module).__name__} for {key!r}")
+                raise ConfigError(
+                    f"PreJEPA requires every extra encoder to have an int emb_dim, got {type(module).__name__} for {key!r}"
+                )
         self.backbone = encoder
         self.predictor = predictor
         self.extra_encoders = extra
@@ -138,14 +142,23 @@ class PreJEPA(nn.Module):
         """``(..., T, E)`` -> ``(..., T, P, E)``, the same vector on every patch."""
         return emb.unsqueeze(-2).expand(*emb.shape[:-1], patches, emb.shape[-1])
 
-    def encode(self, info: dict, pixels_key: str = keys.PIXELS, emb_keys: Any = None, prefix: str | None = None,
-               target: str = EMB, is_video: bool = False) -> dict:
+    def encode(
+        self,
+        info: dict,
+        pixels_key: str = keys.PIXELS,
+        emb_keys: Any = None,
+        prefix: str | None = None,
+        target: str = EMB,
+        is_video: bool = False,
+    ) -> dict:
         """Add ``pixels_<target>``, ``<key>_<target>`` per extra input and ``<target>`` (their
         concatenation, ``(B, T, P, d)``) from ``info[pixels_key]: (B, T, C, h, w)`` and
         ``info[prefix + key]: (B, T, in_chans)``. ``emb_keys`` (default: every extra encoder;
         ``action`` only when the info has it) picks the extras. Returns the same dict."""
         if is_video:
-            raise ConfigError("PreJEPA.encode(is_video=True) requires a video encoder, which is not supported; use an image backbone")
+            raise ConfigError(
+                "PreJEPA.encode(is_video=True) requires a video encoder, which is not supported; use an image backbone"
+            )
         who, prefix = f"{type(self).__name__}.encode", prefix or ""
         if emb_keys is None:
             emb_keys = [k for k in self.extra_encoders if k != keys.ACTION or f"{prefix}{k}" in info]
@@ -196,10 +209,14 @@ class PreJEPA(nn.Module):
             raise ConfigError("PreJEPA requires an 'action' extra encoder to roll out actions, got none")
         where = self._slices(embedding.shape[-1], list(self.extra_encoders))[keys.ACTION]
         tiled = self._tile(self.embed(keys.ACTION, act), embedding.shape[-2])
-        return torch.cat([embedding[..., : where.start], tiled.to(embedding.dtype), embedding[..., where.stop :]], dim=-1)
+        return torch.cat(
+            [embedding[..., : where.start], tiled.to(embedding.dtype), embedding[..., where.stop :]], dim=-1
+        )
 
     # -- planning -------------------------------------------------------------------------------
-    def _state(self, info: dict, pixels_key: str, prefix: str, target: str, b: int, s: int | None) -> dict[str, torch.Tensor]:
+    def _state(
+        self, info: dict, pixels_key: str, prefix: str, target: str, b: int, s: int | None
+    ) -> dict[str, torch.Tensor]:
         """Per-env embeddings of the state parts (``pixels`` and the non-action extras):
         ``{"pixels": (B, T, P, Dv), key: (B, T, E)}``, cached in ``info`` as ``pixels_<target>``
         / ``<key>_<target>`` (expanded over the S candidates when there are some)."""
@@ -234,18 +251,24 @@ class PreJEPA(nn.Module):
         squeeze = action_sequence.ndim == 3
         cand = action_sequence.unsqueeze(1) if squeeze else action_sequence
         if cand.ndim != 4:
-            raise SpaceError(f"PreJEPA.rollout requires actions (B, S, H, A) or (B, H, A), got {tuple(action_sequence.shape)}")
+            raise SpaceError(
+                f"PreJEPA.rollout requires actions (B, S, H, A) or (B, H, A), got {tuple(action_sequence.shape)}"
+            )
         b, s, h, _ = cand.shape
         state = self._state(info, keys.PIXELS, "", EMB, b, None if squeeze else s)
         t, p = state[keys.PIXELS].shape[1:3]
         if h < t:
-            raise ConfigError(f"{type(self).__name__}.rollout requires at least {t} actions (one per context frame), got {h}")
+            raise ConfigError(
+                f"{type(self).__name__}.rollout requires at least {t} actions (one per context frame), got {h}"
+            )
         n = b * s
         act = cand.reshape(n, h, -1)
         ctx_pixels = state[keys.PIXELS]
         parts = [ctx_pixels]
         for key, module in self.extra_encoders.items():  # the action part is a placeholder, filled per candidate below
-            parts.append(self._tile(state[key], p) if key != keys.ACTION else ctx_pixels.new_zeros(b, t, p, module.emb_dim))
+            parts.append(
+                self._tile(state[key], p) if key != keys.ACTION else ctx_pixels.new_zeros(b, t, p, module.emb_dim)
+            )
         ctx = torch.cat(parts, dim=-1)  # (B, T, P, d)
         z = ctx.unsqueeze(1).expand(b, s, *ctx.shape[1:]).reshape(n, *ctx.shape[1:])
         z = self.replace_action_in_embedding(z, act[:, :t])
@@ -316,7 +339,9 @@ class PreJEPA(nn.Module):
         total = next(iter(info.values())).shape[1]
         history = min(self.history_size, total - self.num_pred)
         if history < 1:
-            raise ConfigError(f"{who} requires more than num_pred={self.num_pred} frames per sample, got {total} frames (history {history})")
+            raise ConfigError(
+                f"{who} requires more than num_pred={self.num_pred} frames per sample, got {total} frames (history {history})"
+            )
         for key in self.extra_encoders:
             info[key] = _require(batch, key, who)
         out = self.encode(info)

@@ -57,17 +57,41 @@ class TDMPC2Config(WorldModelConfig):
     needs_reward: ClassVar[bool] = True
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "tiny": {
-            "pixel_encoder": "conv", "image_size": 64, "cnn_width": 16, "embed_dim": 64, "mlp_dim": 128, "enc_dim": 64,
-            "batch_size": 32, "lr": 1e-3, "warmup_steps": 50, "steps": 3000, "discount": 0.9,
+            "pixel_encoder": "conv",
+            "image_size": 64,
+            "cnn_width": 16,
+            "embed_dim": 64,
+            "mlp_dim": 128,
+            "enc_dim": 64,
+            "batch_size": 32,
+            "lr": 1e-3,
+            "warmup_steps": 50,
+            "steps": 3000,
+            "discount": 0.9,
         },
         "small": {
-            "pixel_encoder": "tdmpc2", "image_size": 64, "embed_dim": 256, "mlp_dim": 256, "enc_dim": 128,
-            "batch_size": 128, "lr": 3e-4, "steps": 20000,
+            "pixel_encoder": "tdmpc2",
+            "image_size": 64,
+            "embed_dim": 256,
+            "mlp_dim": 256,
+            "enc_dim": 128,
+            "batch_size": 128,
+            "lr": 3e-4,
+            "steps": 20000,
         },
         "paper": {
-            "pixel_encoder": "tdmpc2", "image_size": 64, "embed_dim": 512, "mlp_dim": 512, "enc_dim": 256,
-            "image_std": (1.0, 1.0, 1.0), "batch_size": 256, "lr": 3e-4, "weight_decay": 0.0, "warmup_steps": 0,
-            "grad_clip": 20.0, "steps": 100000,
+            "pixel_encoder": "tdmpc2",
+            "image_size": 64,
+            "embed_dim": 512,
+            "mlp_dim": 512,
+            "enc_dim": 256,
+            "image_std": (1.0, 1.0, 1.0),
+            "batch_size": 256,
+            "lr": 3e-4,
+            "weight_decay": 0.0,
+            "warmup_steps": 0,
+            "grad_clip": 20.0,
+            "steps": 100000,
         },
     }
 
@@ -103,22 +127,38 @@ class TDMPC2Config(WorldModelConfig):
         super().__post_init__()
         name = type(self).__name__
         if self.pixel_encoder not in _PIXEL_ENCODERS:
-            raise ConfigError(f"{name} requires pixel_encoder in {_PIXEL_ENCODERS}, got {self.pixel_encoder!r}."
-                              f"{did_you_mean(str(self.pixel_encoder), _PIXEL_ENCODERS)}")
+            raise ConfigError(
+                f"{name} requires pixel_encoder in {_PIXEL_ENCODERS}, got {self.pixel_encoder!r}."
+                f"{did_you_mean(str(self.pixel_encoder), _PIXEL_ENCODERS)}"
+            )
         if self.history_size != 1:
             raise ConfigError(f"{name} requires history_size 1 (TD-MPC2 encodes one frame), got {self.history_size}")
-        for key in ("cnn_width", "embed_dim", "mlp_dim", "num_channels", "enc_dim", "num_q", "num_bins", "simnorm_dim",
-                    "proprio_emb_dim", "num_pi_trajs"):
+        for key in (
+            "cnn_width",
+            "embed_dim",
+            "mlp_dim",
+            "num_channels",
+            "enc_dim",
+            "num_q",
+            "num_bins",
+            "simnorm_dim",
+            "proprio_emb_dim",
+            "num_pi_trajs",
+        ):
             check_positive_int(name, key, getattr(self, key))
         for key in ("proprio_dim", "goal_proprio_dim"):
             check_positive_int(name, key, getattr(self, key), minimum=0)
         if self.num_q < 2 or self.num_bins < 2 or not self.vmin < self.vmax:
-            raise ConfigError(f"{name} requires num_q >= 2, num_bins >= 2 and vmin < vmax, "
-                              f"got {self.num_q}, {self.num_bins}, {self.vmin}, {self.vmax}")
+            raise ConfigError(
+                f"{name} requires num_q >= 2, num_bins >= 2 and vmin < vmax, "
+                f"got {self.num_q}, {self.num_bins}, {self.vmin}, {self.vmax}"
+            )
         latent = self.embed_dim + self.proprio_emb_dim * len(self.extra_columns)
         if latent % self.simnorm_dim:
-            raise ConfigError(f"{name} requires the latent width {latent} (embed_dim + proprio_emb_dim per extra input) to be "
-                              f"a multiple of simnorm_dim={self.simnorm_dim}")
+            raise ConfigError(
+                f"{name} requires the latent width {latent} (embed_dim + proprio_emb_dim per extra input) to be "
+                f"a multiple of simnorm_dim={self.simnorm_dim}"
+            )
         if isinstance(self.bc_coef, bool) or not isinstance(self.bc_coef, (int, float)) or self.bc_coef < 0:
             raise ConfigError(f"{name} requires bc_coef >= 0 (0: upstream's loss), got {self.bc_coef!r}")
         for key in ("rho", "discount", "tau"):
@@ -126,8 +166,10 @@ class TDMPC2Config(WorldModelConfig):
             if not 0.0 < value <= 1.0:
                 raise ConfigError(f"{name} requires {key} in (0, 1], got {value!r}")
         if self.pixel_encoder == "tdmpc2" and self.image_size < 35:
-            raise ConfigError(f"{name} requires image_size >= 35 with pixel_encoder 'tdmpc2' (upstream's CNN), "
-                              f"got {self.image_size}; use 'conv'")
+            raise ConfigError(
+                f"{name} requires image_size >= 35 with pixel_encoder 'tdmpc2' (upstream's CNN), "
+                f"got {self.image_size}; use 'conv'"
+            )
 
     @property
     def extra_columns(self) -> dict[str, int]:
@@ -142,13 +184,34 @@ class TDMPC2Config(WorldModelConfig):
         extra_dims = self.extra_columns
         encoding.update({key: self.proprio_emb_dim for key in extra_dims})
         wm = {
-            "encoding": encoding, "encoder": self.pixel_encoder, "num_channels": self.num_channels, "cnn_width": self.cnn_width,
-            "enc_dim": self.enc_dim, "mlp_dim": self.mlp_dim, "num_bins": self.num_bins, "vmin": self.vmin, "vmax": self.vmax,
-            "num_q": self.num_q, "simnorm_dim": self.simnorm_dim, "q_dropout": self.q_dropout, "tau": self.tau, "rho": self.rho,
-            "discount": self.discount, "entropy_coef": self.entropy_coef, "consistency_coef": self.consistency_coef,
-            "reward_coef": self.reward_coef, "value_coef": self.value_coef, "bc_coef": self.bc_coef, "horizon": self.num_preds,
+            "encoding": encoding,
+            "encoder": self.pixel_encoder,
+            "num_channels": self.num_channels,
+            "cnn_width": self.cnn_width,
+            "enc_dim": self.enc_dim,
+            "mlp_dim": self.mlp_dim,
+            "num_bins": self.num_bins,
+            "vmin": self.vmin,
+            "vmax": self.vmax,
+            "num_q": self.num_q,
+            "simnorm_dim": self.simnorm_dim,
+            "q_dropout": self.q_dropout,
+            "tau": self.tau,
+            "rho": self.rho,
+            "discount": self.discount,
+            "entropy_coef": self.entropy_coef,
+            "consistency_coef": self.consistency_coef,
+            "reward_coef": self.reward_coef,
+            "value_coef": self.value_coef,
+            "bc_coef": self.bc_coef,
+            "horizon": self.num_preds,
             "uncertainty_penalty": self.uncertainty_penalty,
         }
-        cfg = {"image_size": self.image_size, "action_dim": self.frameskip * int(action_dim), "extra_dims": extra_dims,
-               "num_pi_trajs": self.num_pi_trajs, "wm": wm}
+        cfg = {
+            "image_size": self.image_size,
+            "action_dim": self.frameskip * int(action_dim),
+            "extra_dims": extra_dims,
+            "num_pi_trajs": self.num_pi_trajs,
+            "wm": wm,
+        }
         return {"_target_": self.target, "cfg": cfg}

@@ -22,8 +22,18 @@ from torch import nn
 from ...errors import ConfigError
 
 __all__ = [
-    "NormedLinear", "RunningScale", "SimNorm", "gaussian_logprob", "log_std", "mlp", "squash", "symexp", "symlog",
-    "two_hot", "two_hot_inv", "weight_init",
+    "NormedLinear",
+    "RunningScale",
+    "SimNorm",
+    "gaussian_logprob",
+    "log_std",
+    "mlp",
+    "squash",
+    "symexp",
+    "symlog",
+    "two_hot",
+    "two_hot_inv",
+    "weight_init",
 ]
 
 _LOG_SQRT_2PI = 0.5 * math.log(2 * math.pi)
@@ -96,14 +106,18 @@ class SimNorm(nn.Module):
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         if x.shape[-1] % self.simplex_dim:
-            raise ConfigError(f"SimNorm requires a last dim divisible by simplex_dim={self.simplex_dim}, got {tuple(x.shape)}")
+            raise ConfigError(
+                f"SimNorm requires a last dim divisible by simplex_dim={self.simplex_dim}, got {tuple(x.shape)}"
+            )
         return x.unflatten(-1, (-1, self.simplex_dim)).softmax(-1).flatten(-2)
 
 
 class NormedLinear(nn.Linear):
     """``Linear -> Dropout (if dropout) -> LayerNorm (ln) -> act`` (Mish unless given)."""
 
-    def __init__(self, in_features: int, out_features: int, bias: bool = True, dropout: float = 0.0, act: nn.Module | None = None):
+    def __init__(
+        self, in_features: int, out_features: int, bias: bool = True, dropout: float = 0.0, act: nn.Module | None = None
+    ):
         super().__init__(in_features, out_features, bias=bias)
         self.ln = nn.LayerNorm(out_features)
         self.act = act if act is not None else nn.Mish()

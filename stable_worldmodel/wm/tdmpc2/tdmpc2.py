@@ -30,7 +30,18 @@ from torch import nn
 from ... import keys
 from ...errors import ConfigError, SpaceError, UnknownNameError, did_you_mean
 from ..encoders import ConvEncoder
-from .module import NormedLinear, RunningScale, SimNorm, gaussian_logprob, log_std, mlp, squash, two_hot, two_hot_inv, weight_init
+from .module import (
+    NormedLinear,
+    RunningScale,
+    SimNorm,
+    gaussian_logprob,
+    log_std,
+    mlp,
+    squash,
+    two_hot,
+    two_hot_inv,
+    weight_init,
+)
 
 __all__ = ["TDMPC2", "EMB", "PREDICTED_EMB", "PREDICTED_REWARD", "WM_DEFAULTS"]
 
@@ -41,10 +52,28 @@ PIXEL_ENCODERS = ("tdmpc2", "conv")
 #: ``num_channels`` and ``q_dropout`` are ours: upstream always builds its 32-channel CNN; so is
 #: ``bc_coef``, 0 for upstream's loss)
 WM_DEFAULTS: dict[str, Any] = {
-    "encoding": {keys.PIXELS: 512}, "encoder": "tdmpc2", "num_channels": 32, "cnn_width": 16, "enc_dim": 256,
-    "mlp_dim": 512, "num_bins": 101, "vmin": -10.0, "vmax": 10.0, "num_q": 5, "simnorm_dim": 8, "q_dropout": 0.01,
-    "tau": 0.01, "rho": 0.5, "discount": 0.99, "entropy_coef": 1e-4, "consistency_coef": 20.0, "reward_coef": 0.1,
-    "value_coef": 0.1, "horizon": 3, "uncertainty_penalty": 0.5, "bc_coef": 0.0,
+    "encoding": {keys.PIXELS: 512},
+    "encoder": "tdmpc2",
+    "num_channels": 32,
+    "cnn_width": 16,
+    "enc_dim": 256,
+    "mlp_dim": 512,
+    "num_bins": 101,
+    "vmin": -10.0,
+    "vmax": 10.0,
+    "num_q": 5,
+    "simnorm_dim": 8,
+    "q_dropout": 0.01,
+    "tau": 0.01,
+    "rho": 0.5,
+    "discount": 0.99,
+    "entropy_coef": 1e-4,
+    "consistency_coef": 20.0,
+    "reward_coef": 0.1,
+    "value_coef": 0.1,
+    "horizon": 3,
+    "uncertainty_penalty": 0.5,
+    "bc_coef": 0.0,
 }
 
 
@@ -54,7 +83,9 @@ def _plain(cfg: Any) -> dict:
         return dict(cfg)
     if hasattr(cfg, "__dict__"):
         return {k: v for k, v in vars(cfg).items() if not k.startswith("_")}
-    raise ConfigError(f"TDMPC2 requires cfg to be a mapping (upstream's cfg with a 'wm' section), got {type(cfg).__name__}")
+    raise ConfigError(
+        f"TDMPC2 requires cfg to be a mapping (upstream's cfg with a 'wm' section), got {type(cfg).__name__}"
+    )
 
 
 def _read_cfg(cfg: Any) -> dict:
@@ -64,13 +95,27 @@ def _read_cfg(cfg: Any) -> dict:
     wm = _plain(top.get("wm", {}))
     unknown = sorted(set(wm) - set(WM_DEFAULTS))
     if unknown:
-        raise ConfigError(f"TDMPC2 has no cfg.wm key {unknown[0]!r}.{did_you_mean(unknown[0], WM_DEFAULTS)} Keys: {', '.join(WM_DEFAULTS)}")
+        raise ConfigError(
+            f"TDMPC2 has no cfg.wm key {unknown[0]!r}.{did_you_mean(unknown[0], WM_DEFAULTS)} Keys: {', '.join(WM_DEFAULTS)}"
+        )
     wm = {**WM_DEFAULTS, **wm, "encoding": _plain(wm.get("encoding", WM_DEFAULTS["encoding"]))}
-    out = {"image_size": top.get("image_size", 64), "action_dim": top.get("action_dim"), "extra_dims": _plain(top.get("extra_dims") or {}),
-           "num_pi_trajs": top.get("num_pi_trajs", 1), "wm": wm}
-    ints = {"action_dim": out["action_dim"], "num_pi_trajs": out["num_pi_trajs"], "image_size": out["image_size"],
-            **{k: wm[k] for k in ("num_channels", "cnn_width", "enc_dim", "mlp_dim", "num_bins", "num_q", "simnorm_dim", "horizon")},
-            **{f"encoding[{k!r}]": v for k, v in wm["encoding"].items()}}
+    out = {
+        "image_size": top.get("image_size", 64),
+        "action_dim": top.get("action_dim"),
+        "extra_dims": _plain(top.get("extra_dims") or {}),
+        "num_pi_trajs": top.get("num_pi_trajs", 1),
+        "wm": wm,
+    }
+    ints = {
+        "action_dim": out["action_dim"],
+        "num_pi_trajs": out["num_pi_trajs"],
+        "image_size": out["image_size"],
+        **{
+            k: wm[k]
+            for k in ("num_channels", "cnn_width", "enc_dim", "mlp_dim", "num_bins", "num_q", "simnorm_dim", "horizon")
+        },
+        **{f"encoding[{k!r}]": v for k, v in wm["encoding"].items()},
+    }
     for name, value in ints.items():
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
             raise ConfigError(f"TDMPC2 requires cfg {name} to be a positive int, got {value!r}")
@@ -78,12 +123,16 @@ def _read_cfg(cfg: Any) -> dict:
         hint = did_you_mean(str(wm["encoder"]), PIXEL_ENCODERS)
         raise ConfigError(f"TDMPC2 requires cfg.wm.encoder in {PIXEL_ENCODERS}, got {wm['encoder']!r}.{hint}")
     if wm["num_q"] < 2 or wm["num_bins"] < 2 or not wm["vmin"] < wm["vmax"]:
-        raise ConfigError("TDMPC2 requires num_q >= 2, num_bins >= 2 and vmin < vmax, "
-                          f"got {wm['num_q']}, {wm['num_bins']}, {wm['vmin']}, {wm['vmax']}")
+        raise ConfigError(
+            "TDMPC2 requires num_q >= 2, num_bins >= 2 and vmin < vmax, "
+            f"got {wm['num_q']}, {wm['num_bins']}, {wm['vmin']}, {wm['vmax']}"
+        )
     latent = sum(wm["encoding"].values())
     if latent % wm["simnorm_dim"]:
-        raise ConfigError(f"TDMPC2 requires a latent width (sum of cfg.wm.encoding {wm['encoding']}) divisible by "
-                          f"simnorm_dim={wm['simnorm_dim']}, got {latent}")
+        raise ConfigError(
+            f"TDMPC2 requires a latent width (sum of cfg.wm.encoding {wm['encoding']}) divisible by "
+            f"simnorm_dim={wm['simnorm_dim']}, got {latent}"
+        )
     missing = [k for k in wm["encoding"] if k != keys.PIXELS and k not in out["extra_dims"]]
     if missing:
         raise ConfigError(f"TDMPC2 requires cfg.extra_dims for every non-pixel encoding, got none for {missing}")
@@ -93,8 +142,17 @@ def _read_cfg(cfg: Any) -> dict:
 def _upstream_cnn(channels: int) -> nn.Sequential:
     """Upstream's pixel CNN (64x64 -> 4x4 maps): four Mish convs, then Flatten."""
     c = channels
-    return nn.Sequential(nn.Conv2d(3, c, 7, stride=2), nn.Mish(), nn.Conv2d(c, c, 5, stride=2), nn.Mish(),
-                         nn.Conv2d(c, c, 3, stride=2), nn.Mish(), nn.Conv2d(c, c, 3, stride=1), nn.Mish(), nn.Flatten())
+    return nn.Sequential(
+        nn.Conv2d(3, c, 7, stride=2),
+        nn.Mish(),
+        nn.Conv2d(c, c, 5, stride=2),
+        nn.Mish(),
+        nn.Conv2d(c, c, 3, stride=2),
+        nn.Mish(),
+        nn.Conv2d(c, c, 3, stride=1),
+        nn.Mish(),
+        nn.Flatten(),
+    )
 
 
 def _require(info: dict, key: str, who: str) -> torch.Tensor:
@@ -124,7 +182,12 @@ class TDMPC2(nn.Module):
         super().__init__()
         self.cfg = c = _read_cfg(cfg)
         wm = c["wm"]
-        self.action_dim, self.num_bins, self.vmin, self.vmax = c["action_dim"], wm["num_bins"], float(wm["vmin"]), float(wm["vmax"])
+        self.action_dim, self.num_bins, self.vmin, self.vmax = (
+            c["action_dim"],
+            wm["num_bins"],
+            float(wm["vmin"]),
+            float(wm["vmax"]),
+        )
         self.scale = RunningScale(wm["tau"])
         encoding = wm["encoding"]
         self.use_pixels = keys.PIXELS in encoding
@@ -139,21 +202,30 @@ class TDMPC2(nn.Module):
                 for kernel, stride in ((7, 2), (5, 2), (3, 2), (3, 1)):
                     side = (side - kernel) // stride + 1
                 if side < 1:
-                    raise ConfigError(f"TDMPC2's upstream CNN requires image_size >= 35, got {c['image_size']}; use cfg.wm.encoder='conv'")
+                    raise ConfigError(
+                        f"TDMPC2's upstream CNN requires image_size >= 35, got {c['image_size']}; use cfg.wm.encoder='conv'"
+                    )
                 self.pixel_encoder = nn.Linear(wm["num_channels"] * side * side, width)
         if extra_encoders is None:
             extra_encoders = {
-                k: nn.Sequential(NormedLinear(c["extra_dims"][k], wm["enc_dim"]), nn.Linear(wm["enc_dim"], d), nn.LayerNorm(d))
-                for k, d in encoding.items() if k != keys.PIXELS
+                k: nn.Sequential(
+                    NormedLinear(c["extra_dims"][k], wm["enc_dim"]), nn.Linear(wm["enc_dim"], d), nn.LayerNorm(d)
+                )
+                for k, d in encoding.items()
+                if k != keys.PIXELS
             }
-        self.extra_encoders = extra_encoders if isinstance(extra_encoders, nn.ModuleDict) else nn.ModuleDict(dict(extra_encoders))
+        self.extra_encoders = (
+            extra_encoders if isinstance(extra_encoders, nn.ModuleDict) else nn.ModuleDict(dict(extra_encoders))
+        )
         self.latent_dim = sum(encoding.values())
         za = self.latent_dim + self.action_dim
         self.sim_norm = SimNorm(wm["simnorm_dim"])
         self.dynamics = mlp(za, wm["mlp_dim"], self.latent_dim, act=SimNorm(wm["simnorm_dim"]))
         self.reward = mlp(za, wm["mlp_dim"], self.num_bins)
         self.pi = mlp(self.latent_dim, wm["mlp_dim"], 2 * self.action_dim)
-        self.qs = nn.ModuleList(mlp(za, wm["mlp_dim"], self.num_bins, dropout=wm["q_dropout"]) for _ in range(wm["num_q"]))
+        self.qs = nn.ModuleList(
+            mlp(za, wm["mlp_dim"], self.num_bins, dropout=wm["q_dropout"]) for _ in range(wm["num_q"])
+        )
         self.apply(weight_init)
         for head in (self.reward, *self.qs):
             nn.init.zeros_(head[-1].weight)  # predict the middle bin (0) at first
@@ -196,7 +268,9 @@ class TDMPC2(nn.Module):
     def forward(self, z: torch.Tensor, action: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """One latent step: ``z (..., L)``, ``action (..., A)`` -> next ``z (..., L)``, reward logits ``(..., num_bins)``."""
         if action.shape[-1] != self.action_dim:
-            raise SpaceError(f"TDMPC2 requires action blocks of {self.action_dim} numbers, got shape {tuple(action.shape)}")
+            raise SpaceError(
+                f"TDMPC2 requires action blocks of {self.action_dim} numbers, got shape {tuple(action.shape)}"
+            )
         za = torch.cat([z, action.to(z.dtype)], dim=-1)
         return self.dynamics(za), self.reward(za)
 
@@ -228,7 +302,9 @@ class TDMPC2(nn.Module):
             trajs.append(torch.stack(steps, dim=1))
         return torch.stack(trajs).mean(0)
 
-    def get_action(self, info: dict, horizon: int | None = None, prefix_actions: torch.Tensor | None = None) -> torch.Tensor:
+    def get_action(
+        self, info: dict, horizon: int | None = None, prefix_actions: torch.Tensor | None = None
+    ) -> torch.Tensor:
         """Action block ``(B, A)`` of the policy prior at the last frame of ``info["pixels"]``
         (``(B, T, C, h, w)`` or ``(B, C, h, w)``): a sample (averaged over ``num_pi_trajs``).
         With ``horizon=k``: ``(B, k, A)`` along the latent dynamics (a warm start for a solver's
@@ -241,8 +317,10 @@ class TDMPC2(nn.Module):
             obs = {k: v[:, -1] for k, v in obs.items()}
         z = self.encode_obs(obs)
         if z.ndim != 2:
-            raise SpaceError(f"{who} requires info[{keys.PIXELS!r}] of shape (B, T, C, h, w) or (B, C, h, w), "
-                             f"got {tuple(obs[keys.PIXELS].shape)}")
+            raise SpaceError(
+                f"{who} requires info[{keys.PIXELS!r}] of shape (B, T, C, h, w) or (B, C, h, w), "
+                f"got {tuple(obs[keys.PIXELS].shape)}"
+            )
         if prefix_actions is not None:
             for t in range(prefix_actions.shape[1]):
                 z = self.forward(z, prefix_actions[:, t].to(z.device))[0]
@@ -276,8 +354,10 @@ class TDMPC2(nn.Module):
         squeeze = action_sequence.ndim == 3
         cand = action_sequence.unsqueeze(1) if squeeze else action_sequence
         if cand.ndim != 4:
-            raise SpaceError(f"{type(self).__name__}.rollout requires actions (B, S, H, A) or (B, H, A), "
-                             f"got {tuple(action_sequence.shape)}")
+            raise SpaceError(
+                f"{type(self).__name__}.rollout requires actions (B, S, H, A) or (B, H, A), "
+                f"got {tuple(action_sequence.shape)}"
+            )
         b, s, h, _ = cand.shape
         z = self._start(info, b, None if squeeze else s)
         z = z.unsqueeze(1).expand(b, s, -1).reshape(b * s, -1)
@@ -339,8 +419,10 @@ class TDMPC2(nn.Module):
         obs = self._inputs(batch, who)
         t_all = action.shape[1]
         if t_all < 2 or reward.shape[:2] != action.shape[:2]:
-            raise ConfigError(f"{who} requires at least 2 frames and reward (B, T) matching action (B, T, A), got action "
-                              f"{tuple(action.shape)} and reward {tuple(reward.shape)}")
+            raise ConfigError(
+                f"{who} requires at least 2 frames and reward (B, T) matching action (B, T, A), got action "
+                f"{tuple(action.shape)} and reward {tuple(reward.shape)}"
+            )
         reward = torch.nan_to_num(reward.reshape(*reward.shape[:2], -1)[..., 0], 0.0)
         horizon = t_all - 1
         emb = self.encode_obs(obs)  # (B, T, L)
@@ -363,14 +445,26 @@ class TDMPC2(nn.Module):
         pi_loss = self._pi_loss(torch.stack(latents, dim=1).detach(), action[:, :horizon])
         consistency, reward_loss = consistency / horizon, reward_loss / horizon
         value_loss = value_loss / (horizon * wm["num_q"])
-        total = wm["consistency_coef"] * consistency + wm["reward_coef"] * reward_loss + wm["value_coef"] * value_loss + pi_loss
+        total = (
+            wm["consistency_coef"] * consistency
+            + wm["reward_coef"] * reward_loss
+            + wm["value_coef"] * value_loss
+            + pi_loss
+        )
         if self.training:
             with torch.no_grad():
-                for p, p_target in zip(self.qs.parameters(), self.target_qs.parameters()):
+                for p, p_target in zip(self.qs.parameters(), self.target_qs.parameters(), strict=False):
                     p_target.lerp_(p, wm["tau"])
         model_loss = total - pi_loss
-        return {"loss": total, "model_loss": model_loss, "consistency_loss": consistency, "reward_loss": reward_loss,
-                "value_loss": value_loss, "pi_loss": pi_loss, "emb": emb}
+        return {
+            "loss": total,
+            "model_loss": model_loss,
+            "consistency_loss": consistency,
+            "reward_loss": reward_loss,
+            "value_loss": value_loss,
+            "pi_loss": pi_loss,
+            "emb": emb,
+        }
 
     def _pi_loss(self, zs: torch.Tensor, data_action: torch.Tensor) -> torch.Tensor:
         """Policy term on detached latents ``zs (B, H, L)``; the Q heads get no gradient from it.

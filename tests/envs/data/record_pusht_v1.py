@@ -31,13 +31,31 @@ CASES = {
     "wall": ([480.0, 480.0, 250.0, 250.0, 0.3, 0.0, 0.0], GOAL, np.tile([[1.0, 1.0]], (8, 1)), None),  # no clip at 512
     "big": ([200.0, 300.0, 260.0, 280.0, 0.0, 0.0, 0.0], GOAL, np.tile([[1.7, -0.2]], (6, 1)), None),  # beyond [-1, 1]
     "atgoal": ([256.0, 200.0, 256.0, 256.0, math.pi / 4 + 0.1, 0.0, 0.0], GOAL, np.zeros((2, 2)), None),
-    "shape_L": ([120.0, 120.0, 300.0, 300.0, 0.5, 0.0, 0.0], GOAL, np.tile([[0.6, 0.6]], (12, 1)),
-                {"block.shape": 1, "block.scale": 35.0, "agent.scale": 30.0}),
-    "shape_plus": ([120.0, 300.0, 300.0, 300.0, 0.2, 0.0, 0.0], GOAL, np.tile([[0.8, 0.0]], (12, 1)),
-                   {"block.shape": 7, "agent.shape": 4, "agent.scale": 20.0}),
-    "colors": ([150.0, 150.0, 300.0, 300.0, 1.2, 0.0, 0.0], [400.0, 400.0, 200.0, 200.0, 0.7, 0.0, 0.0], np.zeros((1, 2)),
-               {"agent.color": [200, 30, 30], "block.color": [20, 180, 60], "goal.color": [250, 200, 10],
-                "background.color": [30, 30, 60], "goal.angle": 1.0, "goal.position": [300.0, 200.0]}),
+    "shape_L": (
+        [120.0, 120.0, 300.0, 300.0, 0.5, 0.0, 0.0],
+        GOAL,
+        np.tile([[0.6, 0.6]], (12, 1)),
+        {"block.shape": 1, "block.scale": 35.0, "agent.scale": 30.0},
+    ),
+    "shape_plus": (
+        [120.0, 300.0, 300.0, 300.0, 0.2, 0.0, 0.0],
+        GOAL,
+        np.tile([[0.8, 0.0]], (12, 1)),
+        {"block.shape": 7, "agent.shape": 4, "agent.scale": 20.0},
+    ),
+    "colors": (
+        [150.0, 150.0, 300.0, 300.0, 1.2, 0.0, 0.0],
+        [400.0, 400.0, 200.0, 200.0, 0.7, 0.0, 0.0],
+        np.zeros((1, 2)),
+        {
+            "agent.color": [200, 30, 30],
+            "block.color": [20, 180, 60],
+            "goal.color": [250, 200, 10],
+            "background.color": [30, 30, 60],
+            "goal.angle": 1.0,
+            "goal.position": [300.0, 200.0],
+        },
+    ),
 }
 FRAME_SIZES = (64, 224)
 
@@ -51,7 +69,12 @@ def factors(vs, prefix=""):
             continue
         d = {"type": type(v).__name__, "default": np.asarray(v.init_value).tolist()}
         if isinstance(v, gym.spaces.Box):
-            d.update(low=np.asarray(v.low).tolist(), high=np.asarray(v.high).tolist(), dtype=str(v.dtype), shape=list(v.shape))
+            d.update(
+                low=np.asarray(v.low).tolist(),
+                high=np.asarray(v.high).tolist(),
+                dtype=str(v.dtype),
+                shape=list(v.shape),
+            )
         if isinstance(v, gym.spaces.Discrete):
             d.update(n=int(v.n), start=int(v.start))
         out[name] = d
@@ -66,8 +89,10 @@ def run(env_id, cases, arrays, meta):
             env = gym.make(env_id, resolution=size).unwrapped
             options = {"state": np.array(start), "goal_state": np.array(goal)}
             if values:  # upstream wants arrays (it calls .tolist() on colors)
-                options["variation_values"] = {k: np.asarray(v, np.uint8 if k.endswith("color") else np.float32 if k.endswith("scale") else None)
-                                               for k, v in values.items()}
+                options["variation_values"] = {
+                    k: np.asarray(v, np.uint8 if k.endswith("color") else np.float32 if k.endswith("scale") else None)
+                    for k, v in values.items()
+                }
             obs, info = env.reset(seed=0, options=options)
             states, rewards, terms, contacts = [obs["state"]], [], [], [info["n_contacts"]]
             frames[size].append(env.render())
@@ -98,8 +123,12 @@ def main():
     arrays, meta = {}, {}
     run("swm/PushT-v1", CASES, arrays, meta)
     dcases = {
-        "grid": ([256.0, 210.0, 256.0, 256.0, 0.0, 0.0, 0.0], GOAL,
-                 np.array([[15, 4], [15, 4], [8, 0], [3, 12], [0, 7], [15, 8], [10, 13], [12, 2]]), None),
+        "grid": (
+            [256.0, 210.0, 256.0, 256.0, 0.0, 0.0, 0.0],
+            GOAL,
+            np.array([[15, 4], [15, 4], [8, 0], [3, 12], [0, 7], [15, 8], [10, 13], [12, 2]]),
+            None,
+        ),
     }
     run("swm/PushT-Discrete-v1", dcases, arrays, meta)
     env = gym.make("swm/PushT-v1").unwrapped
@@ -107,11 +136,15 @@ def main():
     meta["factors"] = factors(env.variation_space)
     meta["info_keys"] = sorted(info)
     meta["env_name"] = info["env_name"]
-    meta["obs_space"] = {k: [np.asarray(v.low).tolist(), np.asarray(v.high).tolist()] for k, v in env.observation_space.spaces.items()}
+    meta["obs_space"] = {
+        k: [np.asarray(v.low).tolist(), np.asarray(v.high).tolist()] for k, v in env.observation_space.spaces.items()
+    }
     denv = gym.make("swm/PushT-Discrete-v1").unwrapped
     meta["discrete_nvec"] = denv.action_space.nvec.tolist()
-    meta["dequantized"] = {f"{i},{j}": denv.quantizer.dequantize(np.array([i, j])).tolist()
-                           for i, j in [(0, 0), (15, 0), (7, 4), (3, 12), (15, 15)]}
+    meta["dequantized"] = {
+        f"{i},{j}": denv.quantizer.dequantize(np.array([i, j])).tolist()
+        for i, j in [(0, 0), (15, 0), (7, 4), (3, 12), (15, 15)]
+    }
     np.savez_compressed(os.path.join(HERE, "pusht_v1_upstream.npz"), **arrays)
     with open(os.path.join(HERE, "pusht_v1_upstream.json"), "w") as f:
         json.dump(meta, f, indent=1, sort_keys=True)
