@@ -22,6 +22,7 @@ __all__ = [
     "CheckpointError",
     "RunMismatchError",
     "DiskFullError",
+    "check_int",
     "did_you_mean",
 ]
 
@@ -86,6 +87,22 @@ class RunMismatchError(ConfigError):
 
 class DiskFullError(SWMError, OSError):
     """A write that failed for lack of space (or a file-size limit); what was written before stays intact."""
+
+
+def check_int(owner: str, key: str, value: object, minimum: int = 1) -> int:
+    """``value`` as an ``int`` when it is an integer (numpy integers too; bools refused) ``>= minimum``,
+    else a :class:`ConfigError` ``"<owner> requires <key> to be an integer >= <minimum>, got <value>"``.
+    The one check of integer arguments (sizes, counts, steps) across the package."""
+    import numbers
+
+    if (
+        isinstance(value, bool)
+        or type(value).__name__ == "bool_"
+        or not isinstance(value, numbers.Integral)
+        or value < minimum
+    ):
+        raise ConfigError(f"{owner} requires {key} to be an integer >= {minimum}, got {value!r}")
+    return int(value)
 
 
 def did_you_mean(name: str, candidates: Iterable[str], n: int = 3) -> str:

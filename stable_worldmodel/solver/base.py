@@ -18,7 +18,7 @@ import gymnasium as gym
 import numpy as np
 import torch
 
-from ..errors import ConfigError, SpaceError, did_you_mean
+from ..errors import ConfigError, SpaceError, check_int, did_you_mean
 from ._heap import raise_trim_threshold
 
 logger = logging.getLogger(__name__)
@@ -147,8 +147,7 @@ class BaseSolver:
     def _check_positive(self, **values: Any) -> None:
         """ConfigError unless every value is an integer >= 1 (bools refused)."""
         for key, value in values.items():
-            if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < 1:
-                raise ConfigError(f"{type(self).__name__} requires {key} to be an integer >= 1, got {value!r}")
+            check_int(type(self).__name__, key, value)
 
     def _check_number(
         self,

@@ -13,7 +13,7 @@ import logging
 import math
 from typing import TYPE_CHECKING, Any
 
-from ..errors import ConfigError
+from ..errors import ConfigError, check_int
 from ..wm.base import DerivedFromRun, HasFrozenEncoder
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -25,11 +25,7 @@ logger = logging.getLogger(__name__)
 
 
 def _positive(name: str, value: Any) -> int | None:
-    if value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-        raise ConfigError(f"train requires {name} to be a positive int, got {value!r}")
-    return value
+    return None if value is None else check_int("train", name, value)
 
 
 class _NoLog:

@@ -176,7 +176,8 @@ def _from_file(transformers: Any, file: Path, family: str, overrides: dict[str, 
         return model_class.from_pretrained(str(file.parent), local_files_only=True, **overrides)
     if file.suffix != ".pt":
         raise ConfigError(
-            f"create_backbone requires a weights file named {' or '.join(_HF_WEIGHTS)} or a .pt state dict, got {file.name!r}"
+            f"create_backbone requires a weights file named {' or '.join(_HF_WEIGHTS)} or a .pt state dict, "
+            f"got {file.name!r}"
         )
     model = model_class.from_config(transformers.AutoConfig.from_pretrained(str(file.parent), **overrides))
     state = torch.load(file, map_location="cpu", weights_only=True)

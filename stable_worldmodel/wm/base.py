@@ -30,7 +30,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, ClassVar, Protocol, runtime_checkable
 
-from ..errors import ConfigError, did_you_mean
+from ..errors import ConfigError, check_int, did_you_mean
 
 __all__ = [
     "Actor",
@@ -46,12 +46,8 @@ __all__ = [
 ]
 
 
-def check_positive_int(owner: str, key: str, value: Any, minimum: int = 1) -> int:
-    """``value`` if it is an int >= ``minimum`` (bools refused), else a :class:`ConfigError` naming ``owner.key``."""
-    if isinstance(value, bool) or not isinstance(value, int) or value < minimum:
-        what = "a positive int" if minimum == 1 else f"an int >= {minimum}"
-        raise ConfigError(f"{owner} requires {key} to be {what}, got {value!r}")
-    return value
+#: the package's one integer check (:func:`stable_worldmodel.errors.check_int`), under the configs' name
+check_positive_int = check_int
 
 
 @dataclass
@@ -123,7 +119,8 @@ class WorldModelConfig:
         """The config of ``preset`` with ``overrides`` (unknown fields get a "did you mean" error)."""
         if preset not in cls.presets:
             raise ConfigError(
-                f"{cls.model_name} requires preset in {sorted(cls.presets)}, got {preset!r}.{did_you_mean(preset, cls.presets)}"
+                f"{cls.model_name} requires preset in {sorted(cls.presets)}, got "
+                f"{preset!r}.{did_you_mean(preset, cls.presets)}"
             )
         names = {f.name for f in dataclasses.fields(cls)}
         for key in overrides:

@@ -111,13 +111,15 @@ class ImageEncoderConfig(WorldModelConfig):
         name = type(self).__name__
         if self.encoder not in ("cnn", "vit"):
             raise ConfigError(
-                f"{name} requires encoder 'cnn' or 'vit', got {self.encoder!r}.{did_you_mean(self.encoder, ['cnn', 'vit'])}"
+                f"{name} requires encoder 'cnn' or 'vit', got "
+                f"{self.encoder!r}.{did_you_mean(self.encoder, ['cnn', 'vit'])}"
             )
         for key in ("embed_dim", "cnn_width", "patch_size"):
             check_positive_int(name, key, getattr(self, key))
         if self.encoder == "vit" and self.vit_size not in VIT_SIZES:
             raise ConfigError(
-                f"{name} requires vit_size in {sorted(VIT_SIZES)}, got {self.vit_size!r}.{did_you_mean(self.vit_size, VIT_SIZES)}"
+                f"{name} requires vit_size in {sorted(VIT_SIZES)}, got "
+                f"{self.vit_size!r}.{did_you_mean(self.vit_size, VIT_SIZES)}"
             )
 
     def encoder_tree(self) -> dict[str, Any]:

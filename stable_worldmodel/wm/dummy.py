@@ -66,7 +66,8 @@ class DummyWorldModel(nn.Module):
             candidates = candidates.unsqueeze(1)
         if candidates.ndim != 4:
             raise SpaceError(
-                f"DummyWorldModel.rollout requires candidates (B, S, H, A) or (B, H, A), got shape {tuple(candidates.shape)}"
+                "DummyWorldModel.rollout requires candidates (B, S, H, A) or (B, H, A), "
+                f"got shape {tuple(candidates.shape)}"
             )
         b, s, h, _ = candidates.shape
         z = info.get("emb")

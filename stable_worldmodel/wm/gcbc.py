@@ -101,7 +101,8 @@ class GCBC(GoalImageEncoding, nn.Module):
 
     def loss(self, batch: dict) -> dict:
         """MSE between :meth:`predict` and the action of frame ``history_size - 1`` (``batch``:
-        ``pixels (B, T, C, h, w)`` with ``T >= history_size``, ``action (B, T, A)``, ``goal_pixels (B, 1, C, h, w)``)."""
+        ``pixels (B, T, C, h, w)`` with ``T >= history_size``, ``action (B, T, A)``,
+        ``goal_pixels (B, 1, C, h, w)``)."""
         who = f"{type(self).__name__}.loss"
         pixels = require(batch, keys.PIXELS, who)
         h = self.history_size

@@ -93,7 +93,8 @@ class JEPA(nn.Module):
         return torch.float32
 
     def subgoal_keys(self) -> tuple[str | None, str]:
-        """Info keys of the context and goal embeddings a subgoal waypoint replaces (:mod:`stable_worldmodel.wm.base`)."""
+        """Info keys of the context and goal embeddings a subgoal waypoint replaces
+        (:mod:`stable_worldmodel.wm.base`)."""
         return EMB, GOAL_EMB
 
     # -- verbs --------------------------------------------------------------------------------
@@ -176,7 +177,8 @@ class JEPA(nn.Module):
         return goal_distance(info[PREDICTED_EMB], goal, self.goal_cost, context=info[EMB].shape[-2])
 
     def get_cost(self, info: dict, action_candidates: torch.Tensor) -> torch.Tensor:
-        """Cost of ``action_candidates: (B, S, H, A)`` (normalized action blocks) to reach ``info["goal"]``: ``(B, S)``."""
+        """Cost of ``action_candidates: (B, S, H, A)`` (normalized action blocks)
+        to reach ``info["goal"]``: ``(B, S)``."""
         b, s = action_candidates.shape[:2]
         self._context(info, keys.GOAL, GOAL_EMB, b, s)
         self.rollout(info, action_candidates)

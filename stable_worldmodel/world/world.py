@@ -13,7 +13,7 @@ import gymnasium as gym
 import numpy as np
 
 from ..envs._registry import check_env_id
-from ..errors import ConfigError
+from ..errors import ConfigError, check_int
 from ..wrapper import MegaWrapper
 from ..wrapper._image import check_shape
 from ..wrapper.mega import GOAL_IF_ANY
@@ -67,9 +67,7 @@ def make_world_env(
 
 
 def _positive_int(name: str, value: Any) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ConfigError(f"World requires {name} to be an integer >= 1, got {value!r}")
-    return int(value)
+    return check_int("World", name, value)
 
 
 class World:
@@ -339,7 +337,8 @@ class World:
             episodes = self.num_envs
         if reset_mode == "wait" and isinstance(episodes, int) and episodes > self.num_envs:
             raise ConfigError(
-                f"World.evaluate(reset_mode='wait') plays one episode per env: episodes <= num_envs ({self.num_envs}), got {episodes}"
+                "World.evaluate(reset_mode='wait') plays one episode per env: "
+                f"episodes <= num_envs ({self.num_envs}), got {episodes}"
             )
         return _evaluate(
             self, episodes=episodes, eval_keys=eval_keys, seed=seed, options=options, dump_every=dump_every, video=video

@@ -280,7 +280,8 @@ def refused(fit, _stablewm_home):
 def test_unknown_model_suggests_the_close_one(refused):
     refused(
         UnknownNameError,
-        r"'lewn'\. Did you mean 'lewm'\? Accepted: dinowm, dreamer, dummy, frame, gcbc, gciql, gcivl, lewm, pldm, prejepa, tdmpc2",
+        r"'lewn'\. Did you mean 'lewm'\? "
+        r"Accepted: dinowm, dreamer, dummy, frame, gcbc, gciql, gcivl, lewm, pldm, prejepa, tdmpc2",
         model="lewn",
     )
 
@@ -319,8 +320,8 @@ def test_images_with_other_channels_than_the_model(refused):
         (dict(precision="fp32"), r"precision in \('32', 'bf16', '16'\), got 'fp32'"),
         (dict(precision="16"), r"CUDA device for precision 16, got cpu; use bf16 or 32"),
         (dict(device="gpu"), r"device among auto, cpu, cuda, cuda:N, mps, got 'gpu'"),
-        (dict(steps=0), r"steps to be a positive int, got 0"),
-        (dict(batch_size=True), r"batch_size to be a positive int, got True"),
+        (dict(steps=0), r"steps to be an integer >= 1, got 0"),
+        (dict(batch_size=True), r"batch_size to be an integer >= 1, got True"),
         (dict(steps=None, epochs=-1.0), r"epochs > 0, got -1\.0"),
         (dict(steps=4, epochs=1.0), r"steps or epochs, got both"),
         (dict(seed=-1), r"seed to be an int >= 0, got -1"),

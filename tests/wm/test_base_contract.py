@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 
+import numpy as np
 import pytest
 import torch
 from _tiny import ACTION_DIM, TINY
@@ -114,8 +115,8 @@ def test_a_new_model_declares_a_capability_once_and_planning_sees_it(monkeypatch
 
 
 def test_check_positive_int():
-    assert check_positive_int("X", "n", 3) == 3
+    assert check_positive_int("X", "n", 3) == 3 and check_positive_int("X", "n", np.int64(2)) == 2
     assert check_positive_int("X", "n", 0, minimum=0) == 0
     for bad in (0, -1, True, 1.5, "2"):
-        with pytest.raises(ConfigError, match=r"X requires n to be a positive int, got"):
+        with pytest.raises(ConfigError, match=r"X requires n to be an integer >= 1, got"):
             check_positive_int("X", "n", bad)

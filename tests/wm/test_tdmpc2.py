@@ -231,7 +231,9 @@ def test_save_load_round_trip(model):
     cand = randn(2, 3, 3, A)
     with torch.no_grad():
         assert torch.equal(loaded.get_cost(plan_info(2, 3), cand), model.get_cost(plan_info(2, 3), cand))
-    assert all(torch.equal(a, b) for a, b in zip(loaded.state_dict().values(), model.state_dict().values(), strict=False))
+    assert all(
+        torch.equal(a, b) for a, b in zip(loaded.state_dict().values(), model.state_dict().values(), strict=False)
+    )
 
 
 def test_upstream_cnn_and_proprio():
@@ -432,7 +434,7 @@ def test_goal_proprio_makes_it_goal_conditioned(_stablewm_home):
         TrainData(
             name, wm.get_config("tdmpc2", "tiny", **{**net, "goal_proprio_dim": 3}), seed=0, device=torch.device("cpu")
         )
-    with pytest.raises(ConfigError, match="goal_proprio_dim to be an int >= 0"):
+    with pytest.raises(ConfigError, match="goal_proprio_dim to be an integer >= 0"):
         wm.get_config("tdmpc2", "tiny", goal_proprio_dim=-2)
 
 

@@ -34,8 +34,9 @@ class DreamerConfig(ImageEncoderConfig):
 
     Presets: ``tiny`` (64x64, ConvEncoder of width 8, deter 64, stoch 16, 5 frames per sample,
     2000 steps: about 4 minutes on a 2-core CPU; on TwoRoom its latent starts encoding the agent
-    after ~400 steps, and 1000 steps gave 42% or 70% depending on the run, 2000 gave 70% twice), ``small`` (64x64, width 32, deter 256, stoch 32: one GPU) and
-    ``paper`` (64x64, width 64, deter 512, stoch 32, 16 frames per sample, batch 16, lr 1e-4).
+    after ~400 steps, and 1000 steps gave 42% or 70% depending on the run, 2000 gave 70% twice),
+    ``small`` (64x64, width 32, deter 256, stoch 32: one GPU) and ``paper`` (64x64, width 64,
+    deter 512, stoch 32, 16 frames per sample, batch 16, lr 1e-4).
     """
 
     model_name: ClassVar[str] = "dreamer"

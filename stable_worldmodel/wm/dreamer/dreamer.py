@@ -143,7 +143,8 @@ class Dreamer(nn.Module):
         then reconstructed from the start, and the latent spends its capacity on what moves."""
         if pixels.ndim != 4 or pixels.shape[0] < 1 or tuple(pixels.shape[1:]) != tuple(self.frame_mean.shape):
             raise SpaceError(
-                f"{type(self).__name__}.fit_to_frames requires frames (N, {', '.join(map(str, self.frame_mean.shape))}), "
+                f"{type(self).__name__}.fit_to_frames "
+                f"requires frames (N, {', '.join(map(str, self.frame_mean.shape))}), "
                 f"got shape {tuple(pixels.shape)}"
             )
         self.frame_mean.copy_(pixels.to(self.frame_mean).mean(0))

@@ -53,7 +53,8 @@ class FrameConfig(WorldModelConfig):
         source_cfg = protocol.get("config") or {}
         if "embed_dim" not in source_cfg or "image_size" not in protocol:
             raise ConfigError(
-                f"FrameConfig requires a source run trained here (a protocol.json with its config), got {weights.parent}"
+                "FrameConfig requires a source run trained here (a protocol.json with its config), "
+                f"got {weights.parent}"
             )
         self.image_size = int(protocol["image_size"])
         self.image_mean = tuple(protocol.get("image_mean", self.image_mean))

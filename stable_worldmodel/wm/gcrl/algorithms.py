@@ -67,7 +67,8 @@ def _frames(model: GCRL, batch: dict, extra: int) -> int:
     h = model.history_size
     if pixels.shape[1] < h + extra:
         raise ConfigError(
-            f"{type(model).__name__}.loss ({model.algorithm}) requires history_size + {extra} = {h + extra} frames per sample, "
+            f"{type(model).__name__}.loss ({model.algorithm}) "
+            f"requires history_size + {extra} = {h + extra} frames per sample, "
             f"got {pixels.shape[1]}"
         )
     return h

@@ -183,12 +183,14 @@ class GCRLConfig(ImageEncoderConfig, PredictorConfig):
             and 0.0 < self.goal_gamma < 1.0
         ):
             raise ConfigError(
-                f"{name} requires discount in [0, 1], expectile in (0, 1), value_ema in [0, 1) and goal_gamma in (0, 1), "
+                f"{name} requires discount in [0, 1], expectile in (0, 1), value_ema in [0, 1) "
+                "and goal_gamma in (0, 1), "
                 f"got {self.discount}, {self.expectile}, {self.value_ema}, {self.goal_gamma}"
             )
         if self.awr_alpha < 0 or self.log_std_min > self.log_std_max:
             raise ConfigError(
-                f"{name} requires awr_alpha >= 0 and log_std_min <= log_std_max, got {self.awr_alpha}, {self.log_std_min}, {self.log_std_max}"
+                f"{name} requires awr_alpha >= 0 and log_std_min <= log_std_max, "
+                f"got {self.awr_alpha}, {self.log_std_min}, {self.log_std_max}"
             )
         if self.encoder == "vit" and self.image_size % self.patch_size:
             raise ConfigError(
@@ -244,7 +246,8 @@ class GCRLConfig(ImageEncoderConfig, PredictorConfig):
         }
 
     def target_tree(self, action_dim: int) -> dict[str, Any]:
-        """The ``GCRL`` tree for env actions of ``action_dim`` numbers (heads act on blocks of ``frameskip`` actions)."""
+        """The ``GCRL`` tree for env actions of ``action_dim`` numbers
+        (heads act on blocks of ``frameskip`` actions)."""
         block = self.frameskip * int(action_dim)
         tree: dict[str, Any] = {
             "_target_": self.target,

@@ -84,7 +84,8 @@ class GoalImageEncoding:
         return tokens.detach() if self.detach_embeddings else tokens
 
     def _encode_video(self, pixels: torch.Tensor) -> torch.Tensor:
-        """A video encoder over ``(B, T, C, h, w)``: output ``t`` sees frames ``<= t``, the last one repeated to length T."""
+        """A video encoder over ``(B, T, C, h, w)``: output ``t`` sees frames ``<= t``,
+        the last one repeated to length T."""
         t = pixels.shape[1]
         outs = []
         for k in range(t):

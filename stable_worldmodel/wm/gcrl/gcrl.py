@@ -30,7 +30,8 @@ def _out_features(head: nn.Module) -> int:
     last = head[-1] if isinstance(head, nn.Sequential) else head
     if not isinstance(last, nn.Linear):
         raise ConfigError(
-            f"GCRL requires action_predictor.out_proj to be a Linear (or a Sequential ending with one), got {type(head).__name__}"
+            "GCRL requires action_predictor.out_proj to be a Linear (or a Sequential ending with one), "
+            f"got {type(head).__name__}"
         )
     return last.out_features
 
@@ -94,7 +95,8 @@ class GCRL(GoalImageEncoding, nn.Module):
             raise ConfigError(f"GCRL(algorithm={algorithm!r}) requires {' and '.join(missing)}, got None")
         if not 0.0 <= discount <= 1.0 or awr_alpha < 0 or awr_max_weight <= 0:
             raise ConfigError(
-                f"GCRL requires 0 <= discount <= 1, awr_alpha >= 0 and awr_max_weight > 0, got {discount}, {awr_alpha}, {awr_max_weight}"
+                "GCRL requires 0 <= discount <= 1, awr_alpha >= 0 and awr_max_weight > 0, "
+                f"got {discount}, {awr_alpha}, {awr_max_weight}"
             )
         self.algorithm, self.discount = algorithm, float(discount)
         self.expectile = float(expectile if expectile is not None else (0.9 if algorithm == "gciql" else 0.7))
@@ -111,7 +113,8 @@ class GCRL(GoalImageEncoding, nn.Module):
     def predict_actions(
         self, embedding: torch.Tensor, embedding_goal: torch.Tensor, temperature: float = 1.0
     ) -> tuple[torch.Tensor, torch.Tensor]:
-        """``embedding (B, T, P, d)``, ``embedding_goal (B, 1, P, d)`` -> means ``(B, T, A)``, stds ``(A,)`` (times ``temperature``)."""
+        """``embedding (B, T, P, d)``, ``embedding_goal (B, 1, P, d)`` -> means ``(B, T, A)``,
+        stds ``(A,)`` (times ``temperature``)."""
         means = self.action_predictor(embedding.flatten(1, 2), embedding_goal.flatten(1, 2))
         return means, self._clamped_log_stds().exp() * temperature
 

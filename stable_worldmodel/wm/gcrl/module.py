@@ -252,7 +252,8 @@ class _Positional(nn.Module):
         n, limit = x.shape[1], self.pos_embedding.shape[1]
         if n > limit:
             raise SpaceError(
-                f"{type(self).__name__} requires at most num_frames * num_patches = {self.num_frames} * {self.num_patches} "
+                f"{type(self).__name__} requires at most "
+                f"num_frames * num_patches = {self.num_frames} * {self.num_patches} "
                 f"= {limit} tokens, got {n}; give at most {self.num_frames} frames"
             )
         x = self.dropout(x + self.pos_embedding[:, :n])

@@ -129,7 +129,8 @@ class PreJEPAConfig(PredictorConfig):
         local = backbone_spec(self.backbone).family in LOCAL_FAMILIES
         if local and self.pretrained:
             raise ConfigError(
-                f"{name} requires pretrained=False with backbone {self.backbone!r} (it has no pretrained weights), got True"
+                f"{name} requires pretrained=False with backbone {self.backbone!r} "
+                "(it has no pretrained weights), got True"
             )
         if self.backbone == "blur" and self.image_size % (self.blur_pool * self.cnn_grid):
             raise ConfigError(

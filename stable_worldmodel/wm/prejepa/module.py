@@ -22,7 +22,7 @@ import torch
 import torch.nn.functional as F
 from torch import nn
 
-from ...errors import ConfigError, SpaceError
+from ...errors import ConfigError, SpaceError, check_int
 from ..backbones import create_backbone  # noqa: F401  (upstream's configs name it here)
 from ..encoders import EncoderOutput
 from ..lewm.module import FeedForward
@@ -189,15 +189,15 @@ class CausalPredictor(nn.Module):
         n = x.shape[1]
         if n > self.pos_embedding.shape[1] or n % self.num_patches:
             raise SpaceError(
-                f"CausalPredictor requires T * {self.num_patches} tokens with T <= num_frames={self.num_frames}, got {n} tokens"
+                f"CausalPredictor requires T * {self.num_patches} tokens with T <= num_frames={self.num_frames}, "
+                f"got {n} tokens"
             )
         return self.transformer(self.dropout(x + self.pos_embedding[:, :n]))
 
 
 def _positive_ints(owner: str, **values: Any) -> None:
     for key, value in values.items():
-        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-            raise ConfigError(f"{owner} requires {key} to be a positive int, got {value!r}")
+        check_int(owner, key, value)
 
 
 def _halvings(owner: str, image_size: int, grid: int) -> int:
@@ -293,7 +293,8 @@ class _StandardizedTokens(nn.Module):
         frames never change stay near 0 instead of blowing up)."""
         if pixels.ndim != 4 or len(pixels) < 2:
             raise SpaceError(
-                f"{type(self).__name__}.fit_to_frames requires at least 2 frames (N, C, H, W), got {tuple(pixels.shape)}"
+                f"{type(self).__name__}.fit_to_frames requires at least 2 frames (N, C, H, W), "
+                f"got {tuple(pixels.shape)}"
             )
         _check_images(type(self).__name__, pixels[:1], self.config)
         tokens = torch.cat([self._tokens(pixels[i : i + 512]) for i in range(0, len(pixels), 512)])

@@ -79,7 +79,8 @@ class PreJEPA(nn.Module):
         for key, module in extra.items():
             if not isinstance(getattr(module, "emb_dim", None), int):
                 raise ConfigError(
-                    f"PreJEPA requires every extra encoder to have an int emb_dim, got {type(module).__name__} for {key!r}"
+                    "PreJEPA requires every extra encoder to have an int emb_dim, "
+                    f"got {type(module).__name__} for {key!r}"
                 )
         self.backbone = encoder
         self.predictor = predictor
@@ -182,7 +183,8 @@ class PreJEPA(nn.Module):
         return self.predictor(embedding.reshape(b, t * p, d)).reshape(b, t, p, -1)
 
     def decode(self, info: dict) -> dict:
-        """Add ``reconstructed_pixels (B, T, C, h, w)`` and ``reconstruction_diff`` from ``pixels_emb`` (needs a decoder)."""
+        """Add ``reconstructed_pixels (B, T, C, h, w)`` and ``reconstruction_diff`` from ``pixels_emb``
+        (needs a decoder)."""
         if self.decoder is None:
             raise ConfigError("PreJEPA.decode requires a model built with a decoder, got decoder=None")
         emb = _require(info, PIXELS_EMB, f"{type(self).__name__}.decode")
@@ -324,7 +326,8 @@ class PreJEPA(nn.Module):
     # -- training -------------------------------------------------------------------------------
     def loss(self, batch: dict) -> dict:
         """Teacher-forced next-frame prediction on ``batch``: ``pixels (B, T, C, h, w)`` (or
-        their cached frozen features ``pixels_emb (B, T, P, Dv)``), ``action (B, T, A)`` and, with a proprio encoder, ``proprio (B, T, dp)``.
+        their cached frozen features ``pixels_emb (B, T, P, Dv)``), ``action (B, T, A)`` and,
+        with a proprio encoder, ``proprio (B, T, dp)``.
 
         ``loss`` is the MSE between the predicted and the target features of the frames
         ``num_pred`` ahead of the first ``history`` ones over the pixel and proprio parts
@@ -340,7 +343,8 @@ class PreJEPA(nn.Module):
         history = min(self.history_size, total - self.num_pred)
         if history < 1:
             raise ConfigError(
-                f"{who} requires more than num_pred={self.num_pred} frames per sample, got {total} frames (history {history})"
+                f"{who} requires more than num_pred={self.num_pred} frames per sample, "
+                f"got {total} frames (history {history})"
             )
         for key in self.extra_encoders:
             info[key] = _require(batch, key, who)

@@ -45,7 +45,8 @@ class TDMPC2Config(WorldModelConfig):
     of ~0.12 s on 2 CPU cores, so about 6 minutes, discount 0.9: with TwoRoom's episodes of ~20
     action blocks, 1000 steps at 0.99 left the Q heads anti-correlated with the distance to the
     goal, and their terminal value ranked the expert's actions below random ones; TD-MPC2's own
-    rule, ``(L - 1) / L`` for ``L`` blocks per episode, gives 0.95), ``small`` (upstream's CNN at 64x64, latent 256, MLPs of 256: one GPU) and
+    rule, ``(L - 1) / L`` for ``L`` blocks per episode, gives 0.95), ``small`` (upstream's CNN
+    at 64x64, latent 256, MLPs of 256: one GPU) and
     ``paper`` (upstream's / the paper's defaults: latent 512, MLPs of 512, 5 Q heads, 101 bins in
     [-10, 10], horizon 3, rho 0.5, lr 3e-4, batch 256, gradient clip 20, pixels scaled to
     ``x / 255 - 0.5``).

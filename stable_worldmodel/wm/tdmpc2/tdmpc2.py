@@ -96,7 +96,8 @@ def _read_cfg(cfg: Any) -> dict:
     unknown = sorted(set(wm) - set(WM_DEFAULTS))
     if unknown:
         raise ConfigError(
-            f"TDMPC2 has no cfg.wm key {unknown[0]!r}.{did_you_mean(unknown[0], WM_DEFAULTS)} Keys: {', '.join(WM_DEFAULTS)}"
+            f"TDMPC2 has no cfg.wm key {unknown[0]!r}.{did_you_mean(unknown[0], WM_DEFAULTS)} "
+            f"Keys: {', '.join(WM_DEFAULTS)}"
         )
     wm = {**WM_DEFAULTS, **wm, "encoding": _plain(wm.get("encoding", WM_DEFAULTS["encoding"]))}
     out = {
@@ -203,7 +204,8 @@ class TDMPC2(nn.Module):
                     side = (side - kernel) // stride + 1
                 if side < 1:
                     raise ConfigError(
-                        f"TDMPC2's upstream CNN requires image_size >= 35, got {c['image_size']}; use cfg.wm.encoder='conv'"
+                        f"TDMPC2's upstream CNN requires image_size >= 35, got {c['image_size']}; "
+                        "use cfg.wm.encoder='conv'"
                     )
                 self.pixel_encoder = nn.Linear(wm["num_channels"] * side * side, width)
         if extra_encoders is None:
@@ -266,7 +268,8 @@ class TDMPC2(nn.Module):
         return info
 
     def forward(self, z: torch.Tensor, action: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-        """One latent step: ``z (..., L)``, ``action (..., A)`` -> next ``z (..., L)``, reward logits ``(..., num_bins)``."""
+        """One latent step: ``z (..., L)``, ``action (..., A)`` -> next ``z (..., L)``,
+        reward logits ``(..., num_bins)``."""
         if action.shape[-1] != self.action_dim:
             raise SpaceError(
                 f"TDMPC2 requires action blocks of {self.action_dim} numbers, got shape {tuple(action.shape)}"
