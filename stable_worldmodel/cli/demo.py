@@ -202,7 +202,8 @@ def demo(
         shutil.rmtree(checkpoint_root() / run, ignore_errors=True)
         result = train(model, name, "tiny", steps=train_steps, name=run, seed=seed, progress=sys.stderr.isatty())
         con.print(
-            f"{result.steps} steps in {result.seconds:.0f} s ({result.samples_per_second:.0f} samples/s), train loss {result.train_loss:.4f}; checkpoint {result.folder}",
+            f"{result.steps} steps in {result.seconds:.0f} s ({result.samples_per_second:.0f} samples/s), "
+            f"train loss {result.train_loss:.4f}; checkpoint {result.folder}",
             soft_wrap=True,
         )
         plan = PlanSettings(solver="cem", samples=samples, iterations=iterations, seed=seed, subgoals="none")
@@ -221,7 +222,8 @@ def demo(
 
     eval_seed = seed + EVAL_SEED_OFFSET
     con.rule(
-        f"[{next(step)}/{total}] Evaluating {', '.join(label for label, *_ in policies)} on the same {eval_episodes} seeds"
+        f"[{next(step)}/{total}] Evaluating {', '.join(label for label, *_ in policies)} "
+        f"on the same {eval_episodes} seeds"
     )
     summaries = []
     with make_world(env, min(num_envs, eval_episodes), image_size, max_steps, seed=eval_seed) as world:

@@ -190,18 +190,18 @@ def _held_out(policy: str, dataset: str) -> list[int] | None:
     run = checkpoint_run(policy)
     if run is None:
         return None
-    from ..wm.utils import read_protocol, resolve_checkpoint
+    from ..wm.run import Run
 
-    protocol = read_protocol(resolve_checkpoint(run))
-    if protocol.get("dataset") == Path(dataset).stem and protocol.get("val_episodes"):
-        return list(protocol["val_episodes"])
+    protocol = Run.open(run).protocol
+    if protocol.dataset == Path(dataset).stem and protocol.val_episodes:
+        return list(protocol.val_episodes)
     return None
 
 
 def _model_summary(policy: str) -> dict[str, Any]:
-    from ..wm.utils import read_protocol, resolve_checkpoint
+    from ..wm.run import Run
 
-    weights = resolve_checkpoint(checkpoint_run(policy))
-    protocol = read_protocol(weights)
+    run = Run.open(policy)
+    protocol = run.protocol.to_dict()
     keep = ("model", "preset", "dataset", "steps", "seed", "frameskip", "history_size", "image_size", "final")
-    return {"checkpoint": str(weights.parent), **{k: protocol[k] for k in keep if k in protocol}}
+    return {"checkpoint": str(run.folder), **{k: protocol[k] for k in keep if k in protocol}}

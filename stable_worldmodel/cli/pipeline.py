@@ -113,7 +113,10 @@ def collect(
             "--noise",
             min=0.0,
             metavar="SIGMA",
-            help="Std of the Gaussian noise on the expert's actions (default: 1.0 times the action bound for experts that take noise, so the data shows what varied actions do; 0 records clean demonstrations).",
+            help=(
+                "Std of the Gaussian noise on the expert's actions (default: 1.0 times the action bound for experts "
+                "that take noise, so the data shows what varied actions do; 0 records clean demonstrations)."
+            ),
             show_default=False,
         ),
     ] = None,
@@ -241,7 +244,10 @@ def eval_cmd(
             "--policy",
             "-p",
             metavar="POLICY",
-            help="random, expert, wm:RUN (plan with checkpoint RUN, see `swm list model`) or gc:RUN (act with the goal-conditioned policy RUN: gcbc, gcivl, gciql). With --fov-sweep, several: P1,P2.",
+            help=(
+                "random, expert, wm:RUN (plan with checkpoint RUN, see `swm list model`) or gc:RUN (act with the "
+                "goal-conditioned policy RUN: gcbc, gcivl, gciql). With --fov-sweep, several: P1,P2."
+            ),
         ),
     ] = "random",
     episodes: Annotated[
@@ -287,7 +293,10 @@ def eval_cmd(
         typer.Option(
             "--cost",
             metavar="C",
-            help="auto: min for goal-distance models, the model's own cost for the others (TD-MPC2); min: the predicted step closest to the goal counts (reach it at any step); final: the last one (upstream's).",
+            help=(
+                "auto: min for goal-distance models, the model's own cost for the others (TD-MPC2); min: the "
+                "predicted step closest to the goal counts (reach it at any step); final: the last one (upstream's)."
+            ),
         ),
     ] = "auto",
     subgoals: Annotated[
@@ -295,7 +304,13 @@ def eval_cmd(
         typer.Option(
             "--subgoals",
             metavar="METHOD",
-            help="wm: policies: graph = plan towards waypoints on a latent graph of the run's training episodes (search on the replay buffer; takes detours the goal distance alone misses); none = plan on the goal alone (plain MPC, as papers report); auto = on the goal alone, and on the graph's waypoints once an episode stops getting closer (LeWM / PLDM / PreJEPA / Dreamer runs whose training dataset is on disk; else none).",
+            help=(
+                "wm: policies: graph = plan towards waypoints on a latent graph of the run's training episodes "
+                "(search on the replay buffer; takes detours the goal distance alone misses); none = plan on the "
+                "goal alone (plain MPC, as papers report); auto = on the goal alone, and on the graph's waypoints "
+                "once an episode stops getting closer (LeWM / PLDM / PreJEPA / Dreamer runs whose training dataset "
+                "is on disk; else none)."
+            ),
         ),
     ] = "auto",
     lookahead: Annotated[
@@ -314,7 +329,10 @@ def eval_cmd(
             "--patience",
             parser=int_in(1),
             metavar="STEPS",
-            help="With --subgoals auto: env steps without progress towards the goal before an episode aims at waypoints (default: H x the action block // 2, at least 10).",
+            help=(
+                "With --subgoals auto: env steps without progress towards the goal before an episode aims at "
+                "waypoints (default: H x the action block // 2, at least 10)."
+            ),
             show_default=False,
         ),
     ] = None,
@@ -359,7 +377,10 @@ def eval_cmd(
         typer.Option(
             "--decoder",
             metavar="RUN",
-            help="With --video and wm:RUN: the frame decoder that shows what the model predicts (default: RUN-frame when it exists).",
+            help=(
+                "With --video and wm:RUN: the frame decoder that shows what the model predicts "
+                "(default: RUN-frame when it exists)."
+            ),
             show_default=False,
         ),
     ] = None,
@@ -368,7 +389,11 @@ def eval_cmd(
         typer.Option(
             "--fov-sweep",
             metavar="FACTORS",
-            help="Generalization report: evaluate in distribution, with each factor (all: every factor group; or F1,F2) resampled, and with all resampled, on the same seeds; a table, a heatmap PNG (beside --json, or --plot) and the JSON.",
+            help=(
+                "Generalization report: evaluate in distribution, with each factor (all: every factor group; or "
+                "F1,F2) resampled, and with all resampled, on the same seeds; a table, a heatmap PNG (beside --json, "
+                "or --plot) and the JSON."
+            ),
             show_default=False,
         ),
     ] = None,
@@ -563,7 +588,10 @@ def sweep(
     file: Annotated[
         Path,
         typer.Argument(
-            help="YAML: envs, policies, factors (none, a factor or group, all, or a list resampled together), episodes, seed, num_envs, max_steps, image_size, device, plan.",
+            help=(
+                "YAML: envs, policies, factors (none, a factor or group, all, or a list resampled together), "
+                "episodes, seed, num_envs, max_steps, image_size, device, plan."
+            ),
             metavar="FILE",
             exists=True,
             dir_okay=False,

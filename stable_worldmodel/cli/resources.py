@@ -108,7 +108,8 @@ def _protocol_rows(protocol: dict[str, Any]) -> list[tuple[str, Any]]:
 
 def checkpoint_info(name: str, folder: Path) -> dict[str, Any]:
     """What ``swm show model`` prints for a checkpoint folder: files, ``_target_``, parameters, protocol."""
-    from ..wm.utils import CONFIG_NAME, WEIGHTS_NAME, read_protocol
+    from ..wm.run import Run
+    from ..wm.utils import CONFIG_NAME, WEIGHTS_NAME
 
     try:
         config = json.loads((folder / CONFIG_NAME).read_text())
@@ -128,7 +129,7 @@ def checkpoint_info(name: str, folder: Path) -> dict[str, Any]:
         "parameters": elements,
         "tensors": tensors,
         "files": [(p.name + ("/" if p.is_dir() else ""), _entry_size(p)) for p in sorted(folder.iterdir())],
-        "protocol": _protocol_rows(read_protocol(weights)),
+        "protocol": _protocol_rows(Run.open(weights).protocol.to_dict()),
     }
 
 
@@ -277,7 +278,8 @@ def show(
     and config fields of a model type), the columns, counts, shapes and factors of datasets, or
     the spaces and factors of worlds.
 
-    Example: swm show model pusht-lewm; swm show model tdmpc2; swm show dataset tworoom-v1-expert; swm show world swm/TwoRoom-v2
+    Example: swm show model pusht-lewm; swm show model tdmpc2; swm show dataset tworoom-v1-expert;
+    swm show world swm/TwoRoom-v2
     """
     from ..data import dataset_info, world_info
     from .display import display_dataset_info, display_model_info, display_model_type_info, display_world_info

@@ -194,7 +194,8 @@ def load_sweep_file(path: Path) -> dict[str, Any]:
     for key in spec:
         if key not in SWEEP_KEYS:
             raise ConfigError(
-                f"swm sweep file has an unknown key {key!r}.{did_you_mean(key, SWEEP_KEYS)} Keys: {', '.join(SWEEP_KEYS)}"
+                f"swm sweep file has an unknown key {key!r}.{did_you_mean(key, SWEEP_KEYS)} "
+                f"Keys: {', '.join(SWEEP_KEYS)}"
             )
     out = {k: spec.get(k, v) for k, v in SWEEP_KEYS.items()}
     for key in ("envs", "policies", "factors"):

@@ -115,7 +115,10 @@ def train_cmd(
     model: Annotated[
         str,
         typer.Argument(
-            help="Model to train: lewm, pldm, prejepa, tdmpc2, dreamer, dummy (world models), gcbc, gcivl, gciql (goal-conditioned policies) or frame (a decoder of another run's latents, with --from RUN).",
+            help=(
+                "Model to train: lewm, pldm, prejepa, tdmpc2, dreamer, dummy (world models), gcbc, gcivl, gciql "
+                "(goal-conditioned policies) or frame (a decoder of another run's latents, with --from RUN)."
+            ),
             metavar="MODEL",
             show_default=False,
         ),
@@ -201,7 +204,10 @@ def train_cmd(
         typer.Option(
             "--from",
             metavar="RUN",
-            help="frame only: the run whose latents the decoder learns to turn into frames (run name default: RUN-frame).",
+            help=(
+                "frame only: the run whose latents the decoder learns to turn into frames "
+                "(run name default: RUN-frame)."
+            ),
             show_default=False,
         ),
     ] = None,
@@ -210,7 +216,11 @@ def train_cmd(
         typer.Option(
             "--set",
             metavar="KEY=VALUE",
-            help="A config field of the model (repeatable), e.g. --set proprio_dim=2; VALUE is read as JSON when it parses (see `swm show model MODEL` for the fields). A key that is also a flag (lr, steps, batch_size, seed, device, frameskip...) sets that flag: giving both takes one value.",
+            help=(
+                "A config field of the model (repeatable), e.g. --set proprio_dim=2; VALUE is read as JSON when it "
+                "parses (see `swm show model MODEL` for the fields). A key that is also a flag (lr, steps, "
+                "batch_size, seed, device, frameskip...) sets that flag: giving both takes one value."
+            ),
             show_default=False,
         ),
     ] = None,
@@ -218,10 +228,12 @@ def train_cmd(
     """Train MODEL on a recorded dataset; the checkpoint goes to $STABLEWM_HOME/checkpoints/RUN.
 
     Example: swm train lewm --dataset tworoom --preset tiny --name tr-lewm
-    (any config field: --set KEY=VALUE, e.g. swm train tdmpc2 --dataset tr2 --set proprio_dim=2 --set goal_proprio_dim=2)
+    (any config field: --set KEY=VALUE,
+    e.g. swm train tdmpc2 --dataset tr2 --set proprio_dim=2 --set goal_proprio_dim=2)
     (then: swm eval swm/TwoRoom-v2 --policy wm:tr-lewm; a gcbc / gcivl / gciql run: --policy gc:RUN;
     swm train frame --from tr-lewm trains the decoder that swm eval --video shows the predictions with).
-    Several processes (DDP; --batch-size is the global batch): torchrun --nproc-per-node N -m stable_worldmodel.cli train ...
+    Several processes (DDP; --batch-size is the global batch):
+    torchrun --nproc-per-node N -m stable_worldmodel.cli train ...
     """
     import os
     import sys
@@ -262,7 +274,8 @@ def train_cmd(
         return
     val = f"{result.val_loss:.4f}" if result.val_loss is not None else "n/a"
     out.print(
-        f"Trained {model} ({preset}) on {dataset or 'the dataset of ' + str(source)}: {result.steps} steps in {result.seconds:.0f} s "
+        f"Trained {model} ({preset}) on {dataset or 'the dataset of ' + str(source)}: "
+        f"{result.steps} steps in {result.seconds:.0f} s "
         f"({result.samples_per_second:.0f} samples/s), train loss {result.train_loss:.4f}, val loss {val}",
         soft_wrap=True,
     )
@@ -271,6 +284,7 @@ def train_cmd(
     if result.features is not None:
         out.print(f"Frozen encoder: {result.features.describe()}", soft_wrap=True)
     out.print(
-        f"Checkpoint: {result.folder} ({how}: swm eval ENV --policy {prefix}:{result.run}); loss curve: {result.folder / 'loss.png'}",
+        f"Checkpoint: {result.folder} ({how}: swm eval ENV --policy {prefix}:{result.run}); "
+        f"loss curve: {result.folder / 'loss.png'}",
         soft_wrap=True,
     )

@@ -54,11 +54,11 @@ def check_policy(name: str) -> str:
     """``name`` when it is one of :data:`POLICIES`, ``wm:<run>`` or ``gc:<run>`` (a checkpoint that exists)."""
     run = checkpoint_run(name)
     if run is not None:
-        from ..wm.utils import resolve_checkpoint
+        from ..wm.run import Run
 
         if not run:
             raise unknown_name("policy", name, POLICY_CHOICES)
-        resolve_checkpoint(run)  # FileNotFoundError naming where it looked, with "did you mean"
+        Run.open(name)  # FileNotFoundError naming where it looked, with "did you mean"; opened once per command
         return name
     return check_choice("policy", name, POLICY_CHOICES)
 
@@ -70,13 +70,14 @@ def policy_history(name: str) -> int:
         return 1
     import json
 
-    from ..wm.utils import CONFIG_NAME, read_protocol, resolve_checkpoint
+    from ..wm.run import Run
+    from ..wm.utils import CONFIG_NAME
 
-    weights = resolve_checkpoint(name[len(GC_PREFIX) :])
-    history = read_protocol(weights).get("history_size")
-    if history is None and (weights.parent / CONFIG_NAME).is_file():
+    run = Run.open(name)
+    history = run.protocol.history_size
+    if history is None and (run.folder / CONFIG_NAME).is_file():
         try:
-            history = json.loads((weights.parent / CONFIG_NAME).read_text()).get("history_size")
+            history = json.loads((run.folder / CONFIG_NAME).read_text()).get("history_size")
         except (ValueError, AttributeError):  # an unreadable config fails later, with its own message
             history = None
     return int(history or 1)
@@ -141,7 +142,8 @@ def make_policy(
         from ..errors import ConfigError
 
         raise ConfigError(
-            f"--noise requires the expert policy of an env whose expert takes action noise, got policy {name!r} on {env_id}"
+            f"--noise requires the expert policy of an env whose expert takes action noise, "
+            f"got policy {name!r} on {env_id}"
         )
     if name.startswith(WM_PREFIX):
         from ..planning.learned import PlanSettings, world_model_policy
@@ -218,7 +220,8 @@ def env_action_dim(env_id: str) -> int | None:
 
 
 def check_factors(world: World, factors: Sequence[str]) -> list[str]:
-    """``factors`` (``"all"``, a factor name or a group such as ``agent``) checked against the world's variation space."""
+    """``factors`` (``"all"``, a factor name or a group such as ``agent``)
+    checked against the world's variation space."""
     factors = list(factors)
     if not factors:
         return factors

@@ -47,8 +47,6 @@ def model_cache_dir(cache_dir: str | Path | None = None) -> Path:
     return get_cache_dir()
 
 
-
-
 def _pickles_in(folder: Path) -> list[Path]:
     return sorted(p for p in folder.glob(f"*{SUFFIX}") if p.is_file())
 
@@ -159,7 +157,8 @@ def _unknown(caller: str, model_name: str | Path, root: Path) -> UnknownNameErro
 
 
 def _find_module(obj: Any, method: str, *, need_callable: bool = True) -> Any:
-    """``obj`` itself or its first sub-module (depth-first) with ``method`` (callable, unless ``need_callable=False``)."""
+    """``obj`` itself or its first sub-module (depth-first) with ``method``
+    (callable, unless ``need_callable=False``)."""
 
     def has(candidate: Any) -> bool:
         return callable(getattr(candidate, method, None)) if need_callable else hasattr(candidate, method)
@@ -190,10 +189,10 @@ def _load_with(
     root = model_cache_dir(cache_dir)
     weights = _new_layout_weights(model_name, root)
     if weights is not None:
-        from ..wm.utils import load_checkpoint
+        from ..wm.run import Run
 
         logger.info("loading %s from %s", method, weights)
-        obj, _ = load_checkpoint(weights, root, trusted_targets=trusted_targets)
+        obj = Run.open(weights, root).load_model(trusted_targets=trusted_targets)
         path = weights
     else:
         path = _pickled_path(model_name, root)

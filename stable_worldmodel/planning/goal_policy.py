@@ -23,7 +23,6 @@ from torch import nn
 from .. import keys
 from ..errors import ConfigError
 from ..policy import FeedForwardPolicy
-from ..wm.config import IMAGENET_MEAN, IMAGENET_STD
 
 __all__ = ["GoalConditionedPolicy", "goal_conditioned_policy"]
 
@@ -67,10 +66,12 @@ def load_run(
     """
     from ..train.trainer import resolve_device
     from ..wm.preprocess import ImageTransform, Normalizer
-    from ..wm.utils import load_checkpoint
+    from ..wm.run import Run
 
     dev = resolve_device(device)
-    model, protocol = load_checkpoint(run, cache_dir)
+    opened = Run.open(run, cache_dir)
+    run = opened.name
+    model, protocol = opened.load_model(), opened.protocol.to_dict()
     if not callable(getattr(model, method, None)):
         raise ConfigError(
             f"{'gc' if other_prefix == 'wm' else 'wm'}:{run} requires {expects}, got a {type(model).__name__}; "
@@ -80,8 +81,8 @@ def load_run(
     process = {}
     for key, norm in protocol.get("normalizers", {}).items():  # action, and proprio for models trained on it
         process[key] = Normalizer.from_dict(norm)
-    size = int(protocol.get("image_size", 224))
-    images = ImageTransform(protocol.get("image_mean", IMAGENET_MEAN), protocol.get("image_std", IMAGENET_STD), size)
+    typed = opened.protocol  # an upstream checkpoint (no protocol.json): 224 px, ImageNet statistics
+    images = ImageTransform(typed.image_mean, typed.image_std, typed.image_size)
     return model, protocol, dev, process, {keys.PIXELS: images, keys.GOAL: images}
 
 

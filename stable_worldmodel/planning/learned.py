@@ -203,9 +203,9 @@ def resolve_subgoals(
     if settings.subgoals != "auto":
         return settings
     if protocol is None:
-        from ..wm.utils import read_protocol, resolve_checkpoint
+        from ..wm.run import Run
 
-        protocol = read_protocol(resolve_checkpoint(run, cache_dir))
+        protocol = Run.open(run, cache_dir).protocol.to_dict()
     why = _graph_unavailable(protocol, cache_dir)
     if why:
         logger.info("Run %r plans on the goal alone (subgoals='auto' -> 'none'): %s", run, why)
@@ -307,7 +307,8 @@ class _WaypointHook:
 
         if not isinstance(model, SupportsSubgoalGraph):
             raise ConfigError(
-                f"subgoals='graph' requires a model with subgoal_keys() (LeWM, PLDM, Dreamer, PreJEPA), got {type(model).__name__}"
+                "subgoals='graph' requires a model with subgoal_keys() (LeWM, PLDM, Dreamer, PreJEPA), "
+                f"got {type(model).__name__}"
             )
         return model.subgoal_keys()
 
@@ -360,7 +361,8 @@ def attach_prediction_panel(
     (``run`` for the model's own decoder), or None when there is none to use."""
     from ..train.trainer import resolve_device
     from ..wm.frame import FrameModel, PredictionPanel
-    from ..wm.utils import checkpoint_root, load_checkpoint, read_protocol, resolve_checkpoint
+    from ..wm.run import Run
+    from ..wm.utils import checkpoint_root
 
     name = decoder or f"{run}-frame"
     if decoder is None and not (checkpoint_root(cache_dir) / name).is_dir():
@@ -369,15 +371,17 @@ def attach_prediction_panel(
 
         if not (isinstance(model, DecodesFrames) and model.decodes_frames):
             return None
-        protocol = read_protocol(resolve_checkpoint(run, cache_dir))
+        protocol = Run.open(run, cache_dir).protocol.to_dict()
         policy.prediction_panel = PredictionPanel(
             model, None, protocol.get("image_mean", (0.5,) * 3), protocol.get("image_std", (0.5,) * 3)
         )
         return run
-    frame, protocol = load_checkpoint(name, cache_dir)
+    opened = Run.open(name, cache_dir)
+    frame, protocol = opened.load_model(), opened.protocol.to_dict()
     if not isinstance(frame, FrameModel):
         raise ConfigError(
-            f"A prediction panel requires a frame decoder run (swm train frame --from {run}), got {type(frame).__name__} in {name!r}"
+            f"A prediction panel requires a frame decoder run (swm train frame --from {run}), "
+            f"got {type(frame).__name__} in {name!r}"
         )
     source = protocol.get("config", {}).get("source")
     if source not in (None, run):

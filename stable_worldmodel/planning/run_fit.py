@@ -92,9 +92,9 @@ def _recorded_env(protocol: dict[str, Any]) -> str | None:
 
 def run_facts(run: str, cache_dir: str | None = None) -> tuple[RunFacts, dict[str, Any]]:
     """``(facts, protocol)`` of checkpoint ``run`` (an upstream checkpoint without a protocol: nothing recorded)."""
-    from ..wm.utils import read_protocol, resolve_checkpoint
+    from ..wm.run import Run
 
-    protocol = read_protocol(resolve_checkpoint(run, cache_dir))
+    protocol = Run.open(run, cache_dir).protocol.to_dict()
     return RunFacts.from_protocol(run, protocol), protocol
 
 
@@ -136,7 +136,8 @@ def check_run_fits(
     if action_dim is not None and facts.action_dim is not None and int(action_dim) != facts.action_dim:
         home = facts.env or "the env its dataset was recorded from"
         raise RunMismatchError(
-            f"{who} requires an env with {facts.action_dim}-dim actions (run {run!r} was trained on {facts.trained_on()}), "
+            f"{who} requires an env with {facts.action_dim}-dim actions "
+            f"(run {run!r} was trained on {facts.trained_on()}), "
             f"got {env_id or 'an env'} with {int(action_dim)}-dim actions; evaluate it on {home}, or train a run on a "
             f"dataset{env_note} (swm collect {env_id or 'ENV'} --policy expert, then swm train)"
         )
@@ -160,7 +161,8 @@ def check_run_fits(
         )
         raise RunMismatchError(
             f"{who} requires {image_option}{h} (run {run!r} was trained on {h}x{w} frames of {facts.trained_on()}), "
-            f"got {image_option}{int(image_size)}; drop {_bare(image_option)} (it defaults to the run's) or set it to {h}, "
+            f"got {image_option}{int(image_size)}; drop {_bare(image_option)} (it defaults to the run's) "
+            f"or set it to {h}, "
             f"or pass --force to evaluate at {int(image_size)}x{int(image_size)} anyway{resized}"
         )
     warnings = []
@@ -172,8 +174,8 @@ def check_run_fits(
             same.append("{}x{} frames".format(*facts.frame_size))
         why = f"the same {' and '.join(same)}, so it plans" if same else "it plans"
         warnings.append(
-            f"{who} was trained on {facts.env} (dataset {facts.dataset!r}), got {env_id}: {why}, but on an env it never "
-            f"saw; pass --force to silence this warning"
+            f"{who} was trained on {facts.env} (dataset {facts.dataset!r}), got {env_id}: {why}, "
+            f"but on an env it never saw; pass --force to silence this warning"
         )
     return warnings
 

@@ -71,7 +71,8 @@ class SubgoalGraph:
         ep = np.asarray(episode).reshape(-1)
         if emb.ndim != 2 or len(emb) != len(ep) or len(emb) < 2:
             raise ConfigError(
-                f"SubgoalGraph requires embeddings (N, D) with N >= 2 and one episode id per node, got {tuple(emb.shape)} and {ep.shape}"
+                "SubgoalGraph requires embeddings (N, D) with N >= 2 and one episode id per node, "
+                f"got {tuple(emb.shape)} and {ep.shape}"
             )
         if not (isinstance(lookahead, (int, np.integer)) and not isinstance(lookahead, bool) and lookahead >= 1):
             raise ConfigError(f"SubgoalGraph requires lookahead >= 1 (an int), got {lookahead!r}")

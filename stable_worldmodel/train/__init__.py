@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..errors import ConfigError, check_int
 from ..wm.base import DerivedFromRun, HasFrozenEncoder
+from ..wm.run import PROTOCOL_VERSION, lock_run
 
 if TYPE_CHECKING:  # pragma: no cover
     from .trainer import TrainResult
@@ -106,7 +107,7 @@ def train(
     if not run or "/" in run or "\\" in run or run.startswith("."):
         raise ConfigError(f"train requires a plain run name (no path), got {run!r}")
     folder = wmu.checkpoint_root(cache_dir) / run
-    lock = _lock_run(folder, run) if dist_info.is_main else None
+    lock = lock_run(folder, run) if dist_info.is_main else None
     try:
         resume = _check_run_folder(folder, resume, run)
         distributed.barrier(dist_info)  # every process has checked before process 0 creates the folder
@@ -134,25 +135,6 @@ def train(
     finally:
         if lock is not None:
             lock.release()
-
-
-def _lock_run(folder: Any, run: str) -> Any:
-    """Hold the run's writer lock (``checkpoints/.<run>.lock``) or raise :class:`RunBusyError` naming its holder."""
-    from ..data._lock import WriterLock, lock_path
-    from ..errors import DatasetBusyError, RunBusyError
-
-    folder.parent.mkdir(parents=True, exist_ok=True)
-    try:
-        return WriterLock(folder).acquire()
-    except DatasetBusyError as exc:
-        try:
-            holder = lock_path(folder).read_text().strip() or "another process"
-        except OSError:
-            holder = "another process"
-        raise RunBusyError(
-            f"Run {run!r} requires a single trainer, got one already training it: {holder}; "
-            f"let it finish (or stop it), or train under another --name"
-        ) from exc
 
 
 def _check_run_folder(folder: Any, resume: bool, run: str) -> bool:
@@ -254,6 +236,7 @@ def _train_locked(
         data.use_features(features.features)
         logger.info("%s", features.describe())
     protocol = {
+        "version": PROTOCOL_VERSION,
         "model": model,
         "preset": preset,
         "config": cfg.to_dict(),

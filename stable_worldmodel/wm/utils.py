@@ -414,8 +414,10 @@ def load_checkpoint(
     extra_args: Mapping[str, Any] | None = None,
     *,
     trusted_targets: Any = None,
+    protocol: Mapping[str, Any] | None = None,
 ) -> tuple[Any, dict[str, Any]]:
-    """``(model, protocol)``: :func:`load_pretrained` plus the ``protocol.json`` of our runs."""
+    """``(model, protocol)``: :func:`load_pretrained` plus the ``protocol.json`` of our runs
+    (``protocol``: the one already read, as :class:`~stable_worldmodel.wm.run.Run` passes it)."""
     weights = resolve_checkpoint(name, cache_dir)
     config_path = weights.parent / CONFIG_NAME
     config = _read_json(config_path, "the model config")
@@ -425,7 +427,7 @@ def load_checkpoint(
     from .trust import resolve_targets
 
     resolved = resolve_targets(config, source=config_path, trusted_targets=trusted_targets, aliases=TARGET_ALIASES)
-    protocol = read_protocol(weights)
+    protocol = dict(protocol) if protocol is not None else read_protocol(weights)
     state = _read_weights(weights, protocol)
     model = _build(config, resolved)
     state = convert_vit_keys(state, set(model.state_dict()))

@@ -56,7 +56,8 @@ def template(tmp_path_factory):
 
 @pytest.fixture
 def evil(template, _stablewm_home, tmp_path):
-    """Run ``evil``: run ``good`` whose config.json has ``os.system`` nested in its predictor; returns the marker path."""
+    """Run ``evil``: run ``good`` whose config.json has ``os.system`` nested in its predictor;
+    returns the marker path."""
     shutil.copytree(template, _stablewm_home, dirs_exist_ok=True)
     folder = _stablewm_home / "checkpoints" / "evil"
     shutil.copytree(_stablewm_home / "checkpoints" / "good", folder)
@@ -110,3 +111,20 @@ def test_commands_refuse_a_hostile_run(swm, evil, error_line, args, _stablewm_ho
     assert "'os.system'" in line and "predictor.payload" in line, line
     assert str(_stablewm_home / "checkpoints" / "evil" / "config.json") in line
     assert "STABLEWM_TRUSTED_TARGETS" in line
+
+
+def test_swm_eval_opens_a_run_once(swm, template, _stablewm_home, monkeypatch):
+    """One ``swm eval --policy wm:RUN``: protocol.json parsed once, config and weights read once."""
+    from stable_worldmodel.wm import run as run_module
+    from stable_worldmodel.wm import utils as wmu
+
+    shutil.copytree(template, _stablewm_home, dirs_exist_ok=True)
+    run_module._OPENED.clear()
+    reads, loads = [], []
+    read_json, load = wmu._read_json, wmu.load_checkpoint
+    monkeypatch.setattr(wmu, "_read_json", lambda *a: reads.append(a[0].name) or read_json(*a))
+    monkeypatch.setattr(wmu, "load_checkpoint", lambda *a, **k: loads.append(a[0]) or load(*a, **k))
+    result = swm("eval", TOY, "--policy", "wm:good", "--episodes", "2", "--max-steps", "3", "--device", "cpu",
+                 "--solver", "random", "--samples", "4", "--horizon", "2", "--subgoals", "none")
+    assert result.exit_code == 0, result.output
+    assert reads.count("protocol.json") == 1 and reads.count("config.json") == 1 and len(loads) == 1

@@ -94,8 +94,8 @@ def test_a_damaged_train_state_is_a_typed_error(tmp_path):
 HOLDER = textwrap.dedent("""
     import sys, time
     from pathlib import Path
-    from stable_worldmodel.train import _lock_run
-    lock = _lock_run(Path(sys.argv[1]), "busy")
+    from stable_worldmodel.wm.run import lock_run
+    lock = lock_run(Path(sys.argv[1]), "busy")
     print("locked", flush=True)
     time.sleep(120)
 """)
