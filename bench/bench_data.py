@@ -49,7 +49,8 @@ def main() -> None:
         f"record_rows_per_s {rows / elapsed:.0f} rows/s ({rows} rows, {args.env}, {args.num_envs} envs, {args.size}px)"
     )
     print(
-        f"file_bytes_per_row {os.path.getsize(path) / rows:.0f} (payload {payload / rows:.0f}, uncompressed {raw / rows:.0f})"
+        f"file_bytes_per_row {os.path.getsize(path) / rows:.0f} "
+        f"(payload {payload / rows:.0f}, uncompressed {raw / rows:.0f})"
     )
 
     rng = np.random.default_rng(0)

@@ -31,7 +31,8 @@ def main() -> None:
     args = parser.parse_args()
     options = {"variation": ["all"]} if args.variation else None
     print(
-        f"expert success, {args.episodes} episodes (seeds 0..{args.episodes - 1}), {args.num_envs} envs, 64x64, options={options}"
+        f"expert success, {args.episodes} episodes (seeds 0..{args.episodes - 1}), "
+        f"{args.num_envs} envs, 64x64, options={options}"
     )
     print(f"{'env':<26} {'max steps':>9} {'success':>8} {'target':>7} {'mean len':>9} {'eps/s':>7}")
     for env_id, target in TARGETS.items():

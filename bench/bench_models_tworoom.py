@@ -80,7 +80,8 @@ def print_row(row: dict, flush: bool = False) -> None:
     s = row["summary"]
     lo, hi = (100 * v for v in s.interval)
     print(
-        f"| {row['model']} | {row['train_s']:.0f} s | {row['ms_per_step']:.0f} ms | {100 * s.rate:.0f}% [{lo:.1f}, {hi:.1f}] "
+        f"| {row['model']} | {row['train_s']:.0f} s | {row['ms_per_step']:.0f} ms "
+        f"| {100 * s.rate:.0f}% [{lo:.1f}, {hi:.1f}] "
         f"| {row['collect_s']:.0f} + {row['train_s']:.0f} + {row['eval_s']:.0f} s |",
         flush=flush,
     )

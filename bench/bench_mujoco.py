@@ -54,7 +54,8 @@ if quality == "fixed":  # upstream with its renderer-freeing bug patched (module
             self._gl_context.make_current()  # free the GL objects in this renderer's own context
         _close(self)
     mujoco.Renderer.close = close
-kwargs = {"render_quality": quality, "verbose": 0} if quality not in ("-", "fixed") else {}  # upstream's World takes neither
+# upstream's World takes neither
+kwargs = {"render_quality": quality, "verbose": 0} if quality not in ("-", "fixed") else {}
 length = 50  # random actions: every episode runs to the limit
 world = swm.World(env_id, num_envs=n, image_shape=(64, 64), max_episode_steps=length, **kwargs)
 world.set_policy(swm.policy.RandomPolicy(seed=0))

@@ -89,7 +89,8 @@ def world_success(episodes: int) -> None:
     t0 = time.perf_counter()
     result = world.evaluate(episodes=episodes, seed=0)
     print(
-        f"World(num_envs=8).evaluate({episodes}, seed=0): success {result['success_rate']:.0f}% in {time.perf_counter() - t0:.1f} s"
+        f"World(num_envs=8).evaluate({episodes}, seed=0): "
+        f"success {result['success_rate']:.0f}% in {time.perf_counter() - t0:.1f} s"
     )
 
 

@@ -59,7 +59,8 @@ def run(args: argparse.Namespace) -> None:
         world.set_policy(make_policy("random", ENV, seed=0))
         world.record_dataset("toy-goal", episodes=args.episodes, seed=0, options=options)
     print(
-        f"recorded {args.episodes} random-policy episodes of {ENV} (goal fixed at {GOAL}) in {time.perf_counter() - start:.0f} s"
+        f"recorded {args.episodes} random-policy episodes of {ENV} (goal fixed at {GOAL}) "
+        f"in {time.perf_counter() - start:.0f} s"
     )
 
     def evaluate(policy: str, plan=None) -> tuple[SuccessSummary, float]:

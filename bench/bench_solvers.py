@@ -137,7 +137,8 @@ def bench_policy(args) -> None:
             world.step()
         elapsed = time.perf_counter() - t0
     print(
-        f"wm_policy_steps_per_s  TwoRoom 64x64 n_envs={n} CEM 300x30 H=5 block=5 rh=5  {n * steps / elapsed:9.1f} env-steps/s"
+        f"wm_policy_steps_per_s  TwoRoom 64x64 n_envs={n} CEM 300x30 H=5 block=5 rh=5  "
+        f"{n * steps / elapsed:9.1f} env-steps/s"
     )
 
 

@@ -67,7 +67,9 @@ def vit_hf(size="tiny", patch_size=16, image_size=224, pretrained=False, use_mas
     params = dict(hidden_size=hidden, num_hidden_layers=layers, num_attention_heads=heads, intermediate_size=4 * hidden,
                   image_size=image_size, patch_size=patch_size)
     params.update(overrides)
-    return transformers.ViTModel(transformers.ViTConfig(**params), add_pooling_layer=False, use_mask_token=use_mask_token)
+    return transformers.ViTModel(
+        transformers.ViTConfig(**params), add_pooling_layer=False, use_mask_token=use_mask_token
+    )
 
 
 def build(node):
@@ -168,7 +170,11 @@ for b in args["envs"]:
         from stable_worldmodel.policy import PlanConfig
         from stable_worldmodel.solver.cem import CEMSolver
         solver = CEMSolver(model, batch_size=1, num_samples=s, n_steps=iters, topk=30, device="cpu", seed=0)
-    solver.configure(action_space=box, n_envs=b, config=PlanConfig(horizon=h, receding_horizon=h, history_len=hist, action_block=block))
+    solver.configure(
+        action_space=box,
+        n_envs=b,
+        config=PlanConfig(horizon=h, receding_horizon=h, history_len=hist, action_block=block),
+    )
     plan_info = info_for(b, 2)
 
     def plan():

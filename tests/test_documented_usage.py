@@ -425,7 +425,8 @@ API_TARGETS = {
         f"stable_worldmodel.policy.{n}"
         for n in (
             "PlanConfig BasePolicy BasePolicy.get_action BasePolicy.set_env BasePolicy._prepare_info RandomPolicy "
-            "RandomPolicy.get_action ExpertPolicy ExpertPolicy.get_action FeedForwardPolicy FeedForwardPolicy.get_action "
+            "RandomPolicy.get_action ExpertPolicy ExpertPolicy.get_action "
+            "FeedForwardPolicy FeedForwardPolicy.get_action "
             "WorldModelPolicy WorldModelPolicy.get_action AutoActionableModel AutoCostModel"
         ).split()
     ],

@@ -28,6 +28,7 @@ def make_nested() -> Dict:
 
 def make_pusht_like() -> Dict:
     """About 16 leaves, like the PushT variation space."""
+
     def part() -> Dict:
         return Dict({"color": RGBBox(), "scale": Box(0.5, 1.5, shape=()), "angle": Box(-np.pi, np.pi, shape=())})
 

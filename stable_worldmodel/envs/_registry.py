@@ -188,9 +188,9 @@ def register_all() -> None:
             tool_steps=entry.tool_steps,
         )
     # swm/PushT-v1 (upstream 0.1.1's behaviour) and swm/PushT-v2 (our design), TwoRoom-v0 (0.0.3's)
-    # and v1 (upstream 0.1.1's) and v2 (ours), SimplePointMaze-v0 (0.1.1's) and v1 (ours) are supported side by side: silence
-    # Gymnasium's "out of date" notice for them (after Gymnasium's import, whose own
-    # DeprecationWarning filter would otherwise come first).
+    # and v1 (upstream 0.1.1's) and v2 (ours), SimplePointMaze-v0 (0.1.1's) and v1 (ours) are
+    # supported side by side: silence Gymnasium's "out of date" notice for them (after Gymnasium's
+    # import, whose own DeprecationWarning filter would otherwise come first).
     warnings.filterwarnings("ignore", rf".*The environment {SIDE_BY_SIDE} is out of date", DeprecationWarning)
 
 
@@ -216,7 +216,8 @@ def get_entry(env_id: str) -> EnvEntry:
         [f"swm/<Name>DMControl-v0 ({len(dmc)} domains, see `swm envs`)"] if dmc else []
     )
     raise UnknownNameError(
-        f"Unknown environment id {env_id!r}.{hint} Our worlds: {', '.join(shown)} (any registered Gymnasium id works too)"
+        f"Unknown environment id {env_id!r}.{hint} Our worlds: {', '.join(shown)} "
+        "(any registered Gymnasium id works too)"
     )
 
 

@@ -31,7 +31,8 @@ class SupportsRenderSize(Protocol):
 
 
 def check_render_size(owner: str, size: Any) -> tuple[int, int]:
-    """``size`` as an ``(H, W)`` pair of positive ints for ``set_render_size``; ConfigError naming ``owner`` otherwise."""
+    """``size`` as an ``(H, W)`` pair of positive ints for ``set_render_size``;
+    ConfigError naming ``owner`` otherwise."""
     try:
         h, w = (int(s) for s in size)
     except (TypeError, ValueError) as exc:
@@ -103,7 +104,8 @@ def check_variation_option(options: Mapping[str, Any] | None, names: list[str] |
         return None
     if isinstance(requested, str):
         raise ConfigError(
-            f"reset option 'variation' requires a list of factor names, got the string {requested!r}; write [{requested!r}]"
+            f"reset option 'variation' requires a list of factor names, got the string {requested!r}; "
+            f"write [{requested!r}]"
         )
     requested = list(requested)
     for name in requested if names is not None else ():

@@ -96,7 +96,8 @@ def check_render_quality(owner: str, quality: Any) -> str:
     """``quality`` if it is one of :data:`RENDER_QUALITIES`; ConfigError naming ``owner`` otherwise."""
     if quality not in RENDER_QUALITIES:
         raise ConfigError(
-            f"{owner} requires render_quality in {list(RENDER_QUALITIES)}, got {quality!r}.{did_you_mean(str(quality), RENDER_QUALITIES)}"
+            f"{owner} requires render_quality in {list(RENDER_QUALITIES)}, got "
+            f"{quality!r}.{did_you_mean(str(quality), RENDER_QUALITIES)}"
         )
     return quality
 

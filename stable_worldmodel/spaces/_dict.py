@@ -397,7 +397,8 @@ class Dict(gym.spaces.Dict):
         return "\n".join(line for line in lines if line)
 
     def describe(self, indent: int = 0) -> str:
-        """Human-readable tree with more than :meth:`to_str`: sampling order, constraints, current and initial values."""
+        """Human-readable tree with more than :meth:`to_str`: sampling order, constraints,
+        current and initial values."""
         pad = "  " * (indent + 1)
         head = f"Dict(sampling_order={self._order}{', constrained' if self.constrain_fn else ''})"
         lines = [head]

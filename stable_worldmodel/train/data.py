@@ -74,7 +74,8 @@ class TrainData:
         if not path.is_file():
             names = sorted(p.stem for p in path.parent.glob("*.h5"))
             raise FileNotFoundError(
-                f"Training requires a recorded .h5 dataset, got {str(name)!r} ({path} does not exist).{did_you_mean(str(name), names)} "
+                f"Training requires a recorded .h5 dataset, got {str(name)!r} "
+                f"({path} does not exist).{did_you_mean(str(name), names)} "
                 f"Datasets in {path.parent}: {', '.join(names) or '(none)'}"
             )
         self.dataset = HDF5Dataset(name, frameskip=cfg.frameskip, num_steps=cfg.num_steps, cache_dir=cache_dir)
@@ -83,13 +84,15 @@ class TrainData:
         missing = [k for k in (keys.PIXELS, keys.ACTION, *self.extra_keys) if k not in self.dataset.column_names]
         if missing:
             raise DatasetFormatError(
-                f"Training requires dataset columns {missing} in {self.dataset.path}, got {sorted(self.dataset.column_names)}"
+                f"Training requires dataset columns {missing} in {self.dataset.path}, "
+                f"got {sorted(self.dataset.column_names)}"
             )
         self.needs_reward = bool(cfg.needs_reward)
         if self.needs_reward and keys.REWARD not in self.dataset.column_names:
             model = cfg.model_name or type(cfg).__name__
             raise DatasetFormatError(
-                f"Training {model} requires a {keys.REWARD!r} column, got none in dataset {str(name)!r} ({self.dataset.path}), "
+                f"Training {model} requires a {keys.REWARD!r} column, got none in dataset {str(name)!r} "
+                f"({self.dataset.path}), "
                 f"whose columns are {sorted(self.dataset.column_names)}. Record one: World.record_dataset(...) and "
                 "`swm collect` store the env's reward of every step as 'reward' (an env whose reward is 0 everywhere "
                 "gives nothing to learn)"
@@ -108,7 +111,8 @@ class TrainData:
             )
         if shape[-1] != len(cfg.image_mean):
             raise ConfigError(
-                f"Training requires {len(cfg.image_mean)}-channel images, got {shape[-1]} channels in {self.dataset.path}"
+                f"Training requires {len(cfg.image_mean)}-channel images, "
+                f"got {shape[-1]} channels in {self.dataset.path}"
             )
         self.image_shape = tuple(int(v) for v in shape)
         self.action_dim = int(np.prod(self.dataset.column_shape(keys.ACTION)[0]))
@@ -169,7 +173,9 @@ class TrainData:
         rows = np.concatenate(
             [
                 np.arange(o, o + n)
-                for o, n in zip(self.dataset.offsets[self.train_episodes], self.dataset.lengths[self.train_episodes], strict=False)
+                for o, n in zip(
+                    self.dataset.offsets[self.train_episodes], self.dataset.lengths[self.train_episodes], strict=False
+                )
             ]
         )
         return Normalizer.fit(values[rows])

@@ -54,8 +54,9 @@ def fit_frozen_encoder(
     """Fit a frozen encoder (or a model) that learns fixed statistics from data (one with
     ``fit_to_frames``, e.g. :class:`~stable_worldmodel.wm.prejepa.module.BlurPatchEncoder`, also
     inside an ``EvalOnly`` wrapper, or :class:`~stable_worldmodel.wm.dreamer.Dreamer`) on up to
-    ``max_frames`` frames of ``episodes``, evenly spaced and preprocessed as for training. Returns whether there was anything to fit. The fitted buffers
-    are part of the encoder's state dict, so the feature cache's fingerprint follows them."""
+    ``max_frames`` frames of ``episodes``, evenly spaced and preprocessed as for training. Returns
+    whether there was anything to fit. The fitted buffers are part of the encoder's state dict, so
+    the feature cache's fingerprint follows them."""
     target = getattr(encoder, "backbone", encoder)
     fit = getattr(target, "fit_to_frames", None)
     if not callable(fit):
@@ -63,7 +64,9 @@ def fit_frozen_encoder(
     eps = np.asarray(episodes, dtype=np.int64)
     lengths, offsets = np.asarray(dataset.lengths)[eps], np.asarray(dataset.offsets)[eps]
     rows = (
-        np.concatenate([np.arange(o, o + n) for o, n in zip(offsets, lengths, strict=False)]) if len(eps) else np.zeros(0, np.int64)
+        np.concatenate([np.arange(o, o + n) for o, n in zip(offsets, lengths, strict=False)])
+        if len(eps)
+        else np.zeros(0, np.int64)
     )
     if len(rows) < 2:
         raise ValueError(f"fitting the frozen encoder requires at least 2 training frames, got {len(rows)}")

@@ -106,7 +106,8 @@ def load_train_state(path: Path, map_location: Any = None) -> dict[str, Any]:
         )
     warnings.warn(
         f"{path} is a pickled training state (written by an older version): loading it runs code stored in the file; "
-        f"load only files you trust (set {PICKLE_ENV}=1 to refuse pickles). The next checkpoint rewrites it without pickle.",
+        f"load only files you trust (set {PICKLE_ENV}=1 to refuse pickles). "
+        "The next checkpoint rewrites it without pickle.",
         UserWarning,
         stacklevel=2,
     )

@@ -49,7 +49,8 @@ def resolve_device(device: str | torch.device = "auto") -> torch.device:
         raise ConfigError(f"Training requires a device among auto, cpu, cuda, cuda:N, mps, got {device!r}") from exc
     if dev.type == "cuda" and not torch.cuda.is_available():
         raise ConfigError(
-            f"Training requires an available device, got {device!r} but torch sees no CUDA GPU; use --device auto or cpu"
+            f"Training requires an available device, got {device!r} but torch sees no CUDA GPU; "
+            "use --device auto or cpu"
         )
     if dev.type == "mps" and not (getattr(torch.backends, "mps", None) and torch.backends.mps.is_available()):
         raise ConfigError(f"Training requires an available device, got {device!r} but MPS is not available")
@@ -296,7 +297,8 @@ class Trainer:
                     last_loss = distributed.mean_over_processes(self.dist, sum(losses) / len(losses))
                     if not math.isfinite(last_loss):  # the same verdict in every process
                         raise FloatingPointError(
-                            f"Training diverged: loss {losses} in the {len(losses)} steps up to step {self.step}; lower --lr or use --precision 32"
+                            f"Training diverged: loss {losses} in the {len(losses)} steps up to step {self.step}; "
+                            "lower --lr or use --precision 32"
                         )
                     rate = (self.step - start_step) * bs / max(time.perf_counter() - start, 1e-9)
                     record = {

@@ -145,7 +145,8 @@ class RunProtocol:
         version = _opt_int(data, "version", source) or 0
         if version > PROTOCOL_VERSION:
             raise CheckpointError(
-                f"{source} has protocol version {version}, newer than this stable-worldmodel reads ({PROTOCOL_VERSION}); "
+                f"{source} has protocol version {version}, "
+                f"newer than this stable-worldmodel reads ({PROTOCOL_VERSION}); "
                 "upgrade stable-worldmodel"
             )
         final = data.get("final")
@@ -203,7 +204,9 @@ class RunProtocol:
         """``"the checkpoint of step N of M (partial run)"`` for a partial run, else None."""
         if not self.partial:
             return None
-        return f"the checkpoint of step {self.steps_done} of {self.steps} (partial run: it stopped before its last step)"
+        return (
+            f"the checkpoint of step {self.steps_done} of {self.steps} (partial run: it stopped before its last step)"
+        )
 
 
 #: (weights path, its stamp, the protocol's stamp) -> (protocol, shared model cache) of the runs opened

@@ -123,7 +123,8 @@ def _check_options(opts: Mapping[str, Any], state_space: Any) -> None:
     if variation is not None:
         if isinstance(variation, str):
             raise ConfigError(
-                f"reset option 'variation' requires a list of factor names, got the string {variation!r}; write [{variation!r}]"
+                f"reset option 'variation' requires a list of factor names, got the string {variation!r}; "
+                f"write [{variation!r}]"
             )
         if not isinstance(variation, (Sequence, np.ndarray, set, frozenset)) or not all(
             isinstance(v, str) for v in variation

@@ -116,7 +116,10 @@ def shard_plan(episodes: int, seed: int, shards: int) -> list[dict[str, int]]:
     """Split ``episodes`` (seeds ``seed ..``) into ``shards`` contiguous, near-equal seed ranges."""
     sizes = [len(c) for c in np.array_split(np.arange(episodes), min(shards, episodes))]
     starts = np.cumsum([0, *sizes[:-1]])
-    return [{"shard": k, "seed": int(seed + s), "episodes": int(n)} for k, (s, n) in enumerate(zip(starts, sizes, strict=False))]
+    return [
+        {"shard": k, "seed": int(seed + s), "episodes": int(n)}
+        for k, (s, n) in enumerate(zip(starts, sizes, strict=False))
+    ]
 
 
 def _manifest(folder: Path, spec: dict[str, Any], shards: int) -> dict[str, Any]:

@@ -42,7 +42,10 @@ def test_python_dash_m_version():
 
 
 def test_cli_import_pulls_in_no_heavy_module():
-    probe = "import sys, stable_worldmodel.cli; print(sorted(m for m in ('torch', 'h5py', 'cv2', 'matplotlib') if m in sys.modules))"
+    probe = (
+        "import sys, stable_worldmodel.cli; "
+        "print(sorted(m for m in ('torch', 'h5py', 'cv2', 'matplotlib') if m in sys.modules))"
+    )
     out = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True, timeout=60)
     assert out.stdout.strip() == "[]"
 

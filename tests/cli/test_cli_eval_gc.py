@@ -88,7 +88,8 @@ def test_trained_gcbc_beats_the_random_policy(swm, home, tmp_path):
 
 
 def test_history_and_action_blocks_reach_the_policy(swm, home, tmp_path):
-    """A policy on 2 frames and blocks of 2 actions: the World keeps 2 frames, the policy acts with the first action of each block."""
+    """A policy on 2 frames and blocks of 2 actions: the World keeps 2 frames,
+    the policy acts with the first action of each block."""
     from stable_worldmodel.train import train
 
     train(

@@ -124,7 +124,25 @@ def test_swm_eval_opens_a_run_once(swm, template, _stablewm_home, monkeypatch):
     read_json, load = wmu._read_json, wmu.load_checkpoint
     monkeypatch.setattr(wmu, "_read_json", lambda *a: reads.append(a[0].name) or read_json(*a))
     monkeypatch.setattr(wmu, "load_checkpoint", lambda *a, **k: loads.append(a[0]) or load(*a, **k))
-    result = swm("eval", TOY, "--policy", "wm:good", "--episodes", "2", "--max-steps", "3", "--device", "cpu",
-                 "--solver", "random", "--samples", "4", "--horizon", "2", "--subgoals", "none")
+    result = swm(
+        "eval",
+        TOY,
+        "--policy",
+        "wm:good",
+        "--episodes",
+        "2",
+        "--max-steps",
+        "3",
+        "--device",
+        "cpu",
+        "--solver",
+        "random",
+        "--samples",
+        "4",
+        "--horizon",
+        "2",
+        "--subgoals",
+        "none",
+    )
     assert result.exit_code == 0, result.output
     assert reads.count("protocol.json") == 1 and reads.count("config.json") == 1 and len(loads) == 1

@@ -491,7 +491,10 @@ def test_mjrenderer_frames_equal_physics_render():
             envs.append((env, env._physics.render(48, 64, camera_id=env.camera_id)))
         for env, expected in envs:
             frame = env.render()
-            assert frame.shape == expected.shape and np.array_equal(frame, expected), (type(env).__name__, np.abs(frame.astype(int) - expected).max())
+            assert frame.shape == expected.shape and np.array_equal(frame, expected), (
+                type(env).__name__,
+                np.abs(frame.astype(int) - expected).max(),
+            )
         print("ok")
     """)
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)

@@ -49,7 +49,8 @@ _HEADLESS = (
 
 def test_mujoco_imported_after_the_package_renders_headless():
     code = _HEADLESS + (
-        "import stable_worldmodel; import mujoco; from stable_worldmodel.envs.mujoco_render import MjRenderer, setup_gl;"
+        "import stable_worldmodel; import mujoco; "
+        "from stable_worldmodel.envs.mujoco_render import MjRenderer, setup_gl;"
         f"setup_gl(); m = mujoco.MjModel.from_xml_string({XML!r}); d = mujoco.MjData(m); mujoco.mj_forward(m, d);"
         "r = MjRenderer(m, 16, 16); print(os.environ['MUJOCO_GL'], r.render(d, 'c').std() > 0); r.close()"
     )

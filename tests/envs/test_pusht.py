@@ -85,7 +85,9 @@ def test_observation_layout():
 
 def test_determinism_and_seed_dependence():
     a, b = make_env(), make_env()
-    for ref, out in zip(rollout(a, 7, {keys.VARIATION: ["all"]}), rollout(b, 7, {keys.VARIATION: ["all"]}), strict=False):
+    for ref, out in zip(
+        rollout(a, 7, {keys.VARIATION: ["all"]}), rollout(b, 7, {keys.VARIATION: ["all"]}), strict=False
+    ):
         np.testing.assert_array_equal(ref, out)
     for ref, out in zip(rollout(a, 7), rollout(b, 7), strict=False):
         np.testing.assert_array_equal(ref, out)

@@ -48,7 +48,10 @@ def test_registry_lists_the_seed_envs():
 
 
 def test_registering_imports_no_env_code():
-    code = "import sys, stable_worldmodel; print(any(m.startswith('stable_worldmodel.envs.pusht.') for m in sys.modules), 'pymunk' in sys.modules)"
+    code = (
+        "import sys, stable_worldmodel; "
+        "print(any(m.startswith('stable_worldmodel.envs.pusht.') for m in sys.modules), 'pymunk' in sys.modules)"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
     assert out.stdout.split() == ["False", "False"]
 

@@ -98,7 +98,8 @@ def write_dataset(_stablewm_home):
 @pytest.fixture
 def fit(toy):
     """``fit(model, name, **kwargs)``: :func:`stable_worldmodel.train.train` on the toy dataset on the
-    CPU, tiny sizes (``TINY[model]``, none for an unknown model), batch 8, no progress bar; ``kwargs`` override anything."""
+    CPU, tiny sizes (``TINY[model]``, none for an unknown model), batch 8, no progress bar;
+    ``kwargs`` override anything."""
     from stable_worldmodel.train import train
 
     def run(model: str, name: str, **kwargs):

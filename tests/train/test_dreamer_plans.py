@@ -37,5 +37,6 @@ def test_dreamer_waypoints_are_frame_embeddings(toy, _stablewm_home, graph_plan)
     nodes = policy.info_hook.graph.embeddings
     with torch.no_grad():
         goal = model.encode_goal(info[keys.GOAL][:, -1])  # (B, E)
-    for w, g in zip(waypoint[:, 0], goal, strict=False):  # a node of the graph, or the goal itself once within the lookahead
+    # a node of the graph, or the goal itself once within the lookahead
+    for w, g in zip(waypoint[:, 0], goal, strict=False):
         assert torch.isclose(nodes, w, atol=1e-5).all(1).any() or torch.allclose(w, g, atol=1e-5)

@@ -59,7 +59,8 @@ def test_subgoal_graph_on_patch_features_and_not_with_proprio(toy, _stablewm_hom
     assert feats.shape[:2] == (2, 1) and waypoint.shape == (2, 1, *feats.shape[2:])
     nodes = policy.info_hook.graph.embeddings
     goal = policy.solver.model.encode_pixels(seen[0][keys.GOAL][:, -1])  # (B, P, Dv)
-    for w, g in zip(waypoint[:, 0], goal, strict=False):  # a node of the graph, or the goal itself once within the lookahead
+    # a node of the graph, or the goal itself once within the lookahead
+    for w, g in zip(waypoint[:, 0], goal, strict=False):
         assert torch.isclose(nodes, w.flatten(), atol=1e-5).all(1).any() or torch.allclose(w, g, atol=1e-5)
     train("prejepa", toy, steps=2, progress=False, name="pjp", val_every=0, proprio_dim=2, **NET)
     with pytest.raises(ConfigError, match="PreJEPA without proprio.*'pjp'"):

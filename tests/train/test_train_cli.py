@@ -26,7 +26,8 @@ def test_train_prints_the_checkpoint_and_the_rate(swm, toy, _stablewm_home):
     assert result.stderr == ""  # no progress bar when stderr is not a terminal
     summary, where = result.stdout.strip().splitlines()
     match = re.fullmatch(
-        r"Trained dummy \(tiny\) on toy: 5 steps in \d+ s \((\d+) samples/s\), train loss (\d+\.\d{4}), val loss (\d+\.\d{4})",
+        r"Trained dummy \(tiny\) on toy: 5 steps in \d+ s \((\d+) samples/s\), "
+        r"train loss (\d+\.\d{4}), val loss (\d+\.\d{4})",
         summary,
     )
     assert match, summary
@@ -84,9 +85,9 @@ def test_set_overrides_config_fields(swm, toy, _stablewm_home):
 def test_unknown_model_is_one_line_naming_the_close_one(swm, toy, error_line, _stablewm_home):
     result = swm("train", "lewn", "--dataset", toy)
     assert result.exit_code == 1
-    assert (
-        error_line(result)
-        == "Error: Unknown world model 'lewn'. Did you mean 'lewm'? Accepted: dinowm, dreamer, dummy, frame, gcbc, gciql, gcivl, lewm, pldm, prejepa, tdmpc2"
+    assert error_line(result) == (
+        "Error: Unknown world model 'lewn'. Did you mean 'lewm'? "
+        "Accepted: dinowm, dreamer, dummy, frame, gcbc, gciql, gcivl, lewm, pldm, prejepa, tdmpc2"
     )
     assert no_runs(_stablewm_home)
 

@@ -82,7 +82,8 @@ def make_tiny(name: str, seed: int = 0, **overrides):
 def fit_losses(
     model: torch.nn.Module, batch: dict, steps: int = 30, lr: float = 3e-3, optimizer=torch.optim.Adam
 ) -> list[float]:
-    """Take ``steps`` optimizer steps on ``model.loss(batch)["loss"]`` (trainable parameters only); the losses before each step."""
+    """Take ``steps`` optimizer steps on ``model.loss(batch)["loss"]`` (trainable parameters only);
+    the losses before each step."""
     opt = optimizer([p for p in model.parameters() if p.requires_grad], lr=lr)
     losses = []
     for _ in range(steps):

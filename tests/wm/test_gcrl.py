@@ -59,7 +59,8 @@ def build(name: str, seed: int = 0, **overrides) -> torch.nn.Module:
 
 
 def batch(name: str, seed: int = 0, **overrides) -> dict:
-    """A batch as TrainData gives it: ``num_steps`` frames, actions, one goal per sample (sample 0's goal is its frame 1)."""
+    """A batch as TrainData gives it: ``num_steps`` frames, actions, one goal per sample
+    (sample 0's goal is its frame 1)."""
     t = config(name, **overrides).num_steps
     out = {
         keys.PIXELS: images(B, t, seed=seed),

@@ -576,7 +576,8 @@ def test_training_fits_the_blur_encoder_to_the_training_split(toy, _stablewm_hom
             np.arange(o, o + n)
             for o, n in zip(
                 np.asarray(data.offsets)[protocol["train_episodes"]],
-                np.asarray(data.lengths)[protocol["train_episodes"]], strict=False,
+                np.asarray(data.lengths)[protocol["train_episodes"]],
+                strict=False,
             )
         ]
     )

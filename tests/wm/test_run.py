@@ -24,10 +24,25 @@ def saved(_stablewm_home):
     tree = wm.get_config("lewm", "tiny", **TINY).target_tree(ACTION_DIM)
     model = wmu.instantiate(tree)
     protocol = {
-        "version": PROTOCOL_VERSION, "model": "lewm", "preset": "tiny", "dataset": "toy", "image_size": 16,
-        "image_mean": [0.5] * 3, "image_std": [0.5] * 3, "frameskip": 2, "history_size": 2, "action_dim": ACTION_DIM,
-        "dataset_image_shape": [16, 16, 3], "train_episodes": [0, 2], "val_episodes": [1], "steps": 8,
-        "steps_done": 4, "final": None, "normalizers": {}, "config": {"embed_dim": 8}, "future_key": [1, 2],
+        "version": PROTOCOL_VERSION,
+        "model": "lewm",
+        "preset": "tiny",
+        "dataset": "toy",
+        "image_size": 16,
+        "image_mean": [0.5] * 3,
+        "image_std": [0.5] * 3,
+        "frameskip": 2,
+        "history_size": 2,
+        "action_dim": ACTION_DIM,
+        "dataset_image_shape": [16, 16, 3],
+        "train_episodes": [0, 2],
+        "val_episodes": [1],
+        "steps": 8,
+        "steps_done": 4,
+        "final": None,
+        "normalizers": {},
+        "config": {"embed_dim": 8},
+        "future_key": [1, 2],
     }
     folder = _stablewm_home / "checkpoints" / "r"
     wmu.write_checkpoint(model, folder, tree, protocol)
@@ -96,7 +111,11 @@ def test_an_upstream_checkpoint_without_protocol_gets_upstreams_defaults(saved):
     (saved / "protocol.json").unlink()
     p = Run.open("r").protocol
     assert (p.image_size, p.image_mean, p.frameskip, p.trained_here, p.partial) == (
-        224, (0.485, 0.456, 0.406), 1, False, False
+        224,
+        (0.485, 0.456, 0.406),
+        1,
+        False,
+        False,
     )
     assert p == RunProtocol.from_dict({})
 

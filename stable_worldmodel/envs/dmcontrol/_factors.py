@@ -130,7 +130,8 @@ class SiteRGB(Effect):
 
 @dataclass(frozen=True)
 class SiteShown(Effect):
-    """``rendering.render_target`` of a target site: its alpha (as upstream) and, when 1, group 0 so that it is drawn."""
+    """``rendering.render_target`` of a target site: its alpha (as upstream) and, when 1,
+    group 0 so that it is drawn."""
 
     site: str
 

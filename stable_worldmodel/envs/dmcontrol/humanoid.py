@@ -28,8 +28,7 @@ class HumanoidDMControlWrapper(LocomotionWrapper):
     PHYSICS = humanoid.Physics
     DEFAULT_TASK = "walk"
     TASKS = {
-        name: lambda r, v=v: humanoid.Humanoid(move_speed=v, pure_state=False, random=r)
-        for name, v in SPEEDS.items()
+        name: lambda r, v=v: humanoid.Humanoid(move_speed=v, pure_state=False, random=r) for name, v in SPEEDS.items()
     }
     CONTROL_TIMESTEP = 0.025
     HORIZONTAL_QPOS = (0, 1)

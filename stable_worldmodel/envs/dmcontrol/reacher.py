@@ -32,8 +32,7 @@ class ReacherDMControlWrapper(DMControlWrapper):
     PHYSICS = reacher.Physics
     DEFAULT_TASK = "hard"
     TASKS = {
-        name: lambda r, size=size: reacher.Reacher(target_size=size, random=r)
-        for name, size in TARGET_SIZE.items()
+        name: lambda r, size=size: reacher.Reacher(target_size=size, random=r) for name, size in TARGET_SIZE.items()
     }
 
     def __init__(self, task="hard", seed=None, environment_kwargs=None, render_mode=None, *, render_quality="medium"):

@@ -1,4 +1,5 @@
-"""Scripted expert of ``swm/TwoRoom-v2`` (upstream 0.1.1's TwoRoom): through the nearest door that fits, then to the target."""
+"""Scripted expert of ``swm/TwoRoom-v2`` (upstream 0.1.1's TwoRoom): through the nearest door that fits,
+then to the target."""
 
 from __future__ import annotations
 
@@ -20,9 +21,10 @@ class TwoRoomV1Expert(ExpertPolicy):
     Reads ``infos[state][:, -1]`` (B, 2) agent position, ``infos[goal_state][:, -1]`` (B, 2)
     target and the env's private ``infos["_layout"][:, -1]`` (B, 4 + 2 * 3): wall axis, wall
     position, agent radius, agent speed, door centres, door half-extents (0 for absent doors).
-    When the target is in the other room it heads for the centre of the nearest door that fits (half-extent >= ``door_fit`` radii)
-    until within :data:`DOOR_REACHED` px (``door_reached``) of it, then for the target. The action points at the
-    waypoint with length ``min(1, distance / speed)`` (so it never overshoots). ``noise`` adds
+    When the target is in the other room it heads for the centre of the nearest door that fits
+    (half-extent >= ``door_fit`` radii) until within :data:`DOOR_REACHED` px (``door_reached``) of
+    it, then for the target. The action points at the waypoint with length
+    ``min(1, distance / speed)`` (so it never overshoots). ``noise`` adds
     seeded Gaussian noise of that std; actions are clipped to [-1, 1]. Returns (B, 2) float32.
     """
 

@@ -3,8 +3,8 @@
 Rules
 -----
 - The world is a ``grid_size`` x ``grid_size`` grid of floor cells (constructor argument >= 4,
-  default 8; not a factor, since it sets the shape of ``state``) floating in the void. Cells are written ``(x, y)`` = (column, row); ``y`` grows downwards, as in
-  the image.
+  default 8; not a factor, since it sets the shape of ``state``) floating in the void. Cells are
+  written ``(x, y)`` = (column, row); ``y`` grows downwards, as in the image.
 - Actions are ``Discrete(4)``: ``0`` LEFT (x - 1), ``1`` RIGHT (x + 1), ``2`` DOWN (y + 1),
   ``3`` UP (y - 1). Every action moves the agent by one cell; there is no "stay".
 - When the agent steps off a cell, that cell breaks with probability ``prob_break`` (a factor of
