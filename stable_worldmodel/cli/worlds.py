@@ -10,6 +10,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 from .. import keys
+from ..envs._registry import make_env
 from ..errors import unknown_name
 from .errors import check_choice
 
@@ -114,7 +115,7 @@ def _action_bound(env_id: str) -> float:
     import gymnasium as gym
     import numpy as np
 
-    env = gym.make(env_id, disable_env_checker=True)
+    env = make_env(env_id, disable_env_checker=True)
     try:
         space = env.action_space
         if isinstance(space, gym.spaces.Box):
@@ -208,10 +209,9 @@ def check_run_fits(
 
 def env_action_dim(env_id: str) -> int | None:
     """Numbers in one action of ``env_id`` (1 for a ``Discrete`` space; None when the space has no shape)."""
-    import gymnasium as gym
     import numpy as np
 
-    env = gym.make(env_id, disable_env_checker=True)
+    env = make_env(env_id, disable_env_checker=True)
     try:
         shape = env.action_space.shape
         return None if shape is None else int(np.prod(shape))
@@ -296,9 +296,8 @@ def evaluate_policy(
 
 def variation_space_of(env_id: str) -> Any:
     """The variation space of a freshly made ``env_id`` (None when the env has none)."""
-    import gymnasium as gym
 
-    env = gym.make(resolve_env(env_id), disable_env_checker=True)
+    env = make_env(resolve_env(env_id), disable_env_checker=True)
     try:
         return getattr(env.unwrapped, "variation_space", None)
     finally:

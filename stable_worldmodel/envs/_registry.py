@@ -83,15 +83,15 @@ BUILTIN: tuple[EnvEntry, ...] = (
     ),
     EnvEntry(
         "swm/TwoRoom-v0",
-        f"{_P}.two_room.legacy:TwoRoomV0Env",
+        f"{_P}.two_room.v0:TwoRoomV0Env",
         ("continuous", "pymunk"),
-        f"{_P}.two_room.legacy_expert:TwoRoomV0Expert",
+        f"{_P}.two_room.v0_expert:TwoRoomV0Expert",
     ),
     EnvEntry(
         "swm/SimplePointMaze-v0",
-        f"{_P}.simple_point_maze.legacy:SimplePointMazeV0Env",
+        f"{_P}.simple_point_maze.v0:SimplePointMazeV0Env",
         ("continuous",),
-        f"{_P}.simple_point_maze.legacy_expert:SimplePointMazeV0Expert",
+        f"{_P}.simple_point_maze.v0_expert:SimplePointMazeV0Expert",
     ),
     EnvEntry(
         "swm/SimplePointMaze-v1",
@@ -187,11 +187,18 @@ def register_all() -> None:
             max_episode_steps=entry.max_episode_steps,
             tool_steps=entry.tool_steps,
         )
-    # swm/PushT-v1 (upstream 0.1.1's behaviour) and swm/PushT-v2 (our design), TwoRoom-v0 (0.0.3's)
-    # and v1 (upstream 0.1.1's) and v2 (ours), SimplePointMaze-v0 (0.1.1's) and v1 (ours) are
-    # supported side by side: silence Gymnasium's "out of date" notice for them (after Gymnasium's
-    # import, whose own DeprecationWarning filter would otherwise come first).
-    warnings.filterwarnings("ignore", rf".*The environment {SIDE_BY_SIDE} is out of date", DeprecationWarning)
+
+
+def make_env(env_id: str, **kwargs: Any) -> Any:
+    """``gymnasium.make(env_id, **kwargs)`` without Gymnasium's "out of date" notice for the ids we
+    support side by side (swm/PushT-v1 is upstream 0.1.1's PushT and v2 our design, TwoRoom-v0 is
+    0.0.3's, v1 0.1.1's and v2 ours, SimplePointMaze-v0 0.1.1's and v1 ours): silenced here, for this
+    call only (importing the package installs no warnings filter)."""
+    import gymnasium as gym
+
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", rf".*The environment {SIDE_BY_SIDE} is out of date", DeprecationWarning)
+        return gym.make(env_id, **kwargs)
 
 
 def list_envs(tag: str | None = None) -> list[str]:

@@ -12,7 +12,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from ..envs._registry import check_env_id
+from .._compat import world_compat_args
+from ..envs._registry import check_env_id, make_env
 from ..errors import ConfigError, check_int
 from ..wrapper import MegaWrapper
 from ..wrapper._image import check_shape
@@ -47,7 +48,7 @@ def make_world_env(
     kwargs = dict(env_kwargs)
     if add_pixels:
         kwargs.setdefault("render_mode", "rgb_array")
-    env = gym.make(env_name, max_episode_steps=max_episode_steps, disable_env_checker=True, **kwargs)
+    env = make_env(env_name, max_episode_steps=max_episode_steps, disable_env_checker=True, **kwargs)
     for wrapper in pre_wrappers or ():
         env = wrapper(env)
     env = MegaWrapper(
@@ -104,9 +105,8 @@ class World:
         check_env_id(env_name)
         self.env_name = env_name
         n = _positive_int("num_envs", num_envs)
-        add_pixels = kwargs.pop("add_pixels", True)  # upstream 0.1.1: False for envs without pixels
-        if not isinstance(add_pixels, bool):
-            raise ConfigError(f"World requires add_pixels to be a bool, got {add_pixels!r}")
+        compat = world_compat_args(kwargs)  # the older releases' arguments, never passed to the env
+        add_pixels = compat.add_pixels
         if image_shape is None and add_pixels:
             raise ConfigError("World requires image_shape=(H, W) for the pixels it adds (or add_pixels=False)")
         self.image_shape = check_shape("World image_shape", image_shape if image_shape is not None else (1, 1))
@@ -116,14 +116,11 @@ class World:
         self.seed = check_seed("World", seed)
         self.verbose = verbose
         self.goal_conditioned = goal_conditioned
-        mode = kwargs.pop("vectorization_mode", "auto")
-        # upstream 0.1.1's World arguments: never passed on to the env constructor
-        pre_wrappers = list(kwargs.pop("pre_wrappers", None) or [])
-        resample = kwargs.pop("image_resample", None)
-        if resample is not None:
-            logger.info("World(image_resample=%r): images are resized with OpenCV's area/linear filters", resample)
-        # seed 000's World took goal_shape; keep accepting it (goal images at another size)
-        goal_shape = kwargs.pop("goal_shape", None)
+        mode, pre_wrappers, goal_shape = compat.vectorization_mode, compat.pre_wrappers, compat.goal_shape
+        if compat.image_resample is not None:
+            logger.info(
+                "World(image_resample=%r): images are resized with OpenCV's area/linear filters", compat.image_resample
+            )
         goal_shape = check_shape("World goal_shape", goal_shape) if goal_shape is not None else None
         check_env_kwargs(env_name, kwargs)
         factory = partial(

@@ -21,8 +21,8 @@ import stable_worldmodel as swm  # noqa: E402  (registers the swm/... ids)
 from stable_worldmodel import keys  # noqa: E402
 from stable_worldmodel.envs.pusht import PushT, PushTDiscrete  # noqa: E402
 from stable_worldmodel.envs.pusht.env import BLOCK_POSE, GOAL_POSE, N_CONTACTS, POS_AGENT, VEL_AGENT  # noqa: E402
-from stable_worldmodel.envs.two_room.legacy import TwoRoomV0Env  # noqa: E402
-from stable_worldmodel.envs.two_room.legacy_overlap import overlap_fractions  # noqa: E402
+from stable_worldmodel.envs.two_room.v0 import TwoRoomV0Env  # noqa: E402
+from stable_worldmodel.envs.two_room.v0_overlap import overlap_fractions  # noqa: E402
 
 # -- PushT (upstream 0.1.1) -----------------------------------------------------------------------
 PUSHT_GOAL = np.array([256.0, 200.0, 256.0, 256.0, math.pi / 4, 0.0, 0.0])

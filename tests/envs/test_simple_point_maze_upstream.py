@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from stable_worldmodel import keys
-from stable_worldmodel.envs.simple_point_maze.legacy import LAYOUT, SimplePointMazeV0Env
-from stable_worldmodel.envs.simple_point_maze.legacy_expert import SimplePointMazeV0Expert
+from stable_worldmodel.envs.simple_point_maze.v0 import LAYOUT, SimplePointMazeV0Env
+from stable_worldmodel.envs.simple_point_maze.v0_expert import SimplePointMazeV0Expert
 
 REF = np.load(Path(__file__).parent / "data" / "simple_point_maze_v0_upstream.npz")
 MAX_MAD = 3.0  # mean absolute difference allowed between frames, in uint8 levels (3/255)

@@ -1,5 +1,5 @@
 """TwoRoom: navigation through door(s) between two rooms. ``swm/TwoRoom-v1`` (upstream 0.1.1's,
-:mod:`.v1`), ``swm/TwoRoom-v2`` (ours, :mod:`.env`) and ``swm/TwoRoom-v0`` (release 0.0.3's, :mod:`.legacy`).
+:mod:`.v1`), ``swm/TwoRoom-v2`` (ours, :mod:`.env`) and ``swm/TwoRoom-v0`` (release 0.0.3's, :mod:`.v0`).
 
 Classes resolve lazily, so importing this package imports neither pymunk nor OpenCV.
 """
@@ -21,8 +21,8 @@ _WHERE = {
     "TwoRoomEnv": ".env",
     "TwoRoomExpert": ".expert",
     "ExpertPolicy": ".expert",  # 0.0.3 / 0.1.1 name: drives whichever TwoRoom it is set on
-    "TwoRoomV0Env": ".legacy",
-    "TwoRoomV0Expert": ".legacy_expert",
+    "TwoRoomV0Env": ".v0",
+    "TwoRoomV0Expert": ".v0_expert",
     "TwoRoomV1Env": ".v1",
     "TwoRoomV1Expert": ".v1_expert",
 }

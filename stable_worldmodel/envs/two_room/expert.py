@@ -59,7 +59,7 @@ class TwoRoomExpert(ScriptedExpert):
 
 def _controller_for(env: Any) -> type[ScriptedExpert]:
     """The scripted controller of the TwoRoom that ``env`` (a vectorized env, or one env) holds."""
-    from .legacy import TwoRoomV0Env
+    from .v0 import TwoRoomV0Env
     from .v1 import TwoRoomV1Env
 
     first = getattr(env, "envs", None)
@@ -69,7 +69,7 @@ def _controller_for(env: Any) -> type[ScriptedExpert]:
 
         return TwoRoomV1Expert
     if isinstance(base, TwoRoomV0Env):
-        from .legacy_expert import TwoRoomV0Expert
+        from .v0_expert import TwoRoomV0Expert
 
         return TwoRoomV0Expert
     return TwoRoomExpert
@@ -79,7 +79,7 @@ class ExpertPolicy(ScriptedExpert):
     """The scripted expert of any TwoRoom under the name and arguments of 0.0.3 / 0.1.1's
     ``envs.two_room.ExpertPolicy``: it drives the controller of the env it is set on
     (:class:`~.v1_expert.TwoRoomV1Expert` on ``swm/TwoRoom-v1``, upstream's env;
-    :class:`~.legacy_expert.TwoRoomV0Expert` on ``swm/TwoRoom-v0``; :class:`TwoRoomExpert` on
+    :class:`~.v0_expert.TwoRoomV0Expert` on ``swm/TwoRoom-v0``; :class:`TwoRoomExpert` on
     ``swm/TwoRoom-v2`` and before ``set_env``).
 
     ``action_noise`` is the std of the Gaussian action noise; with probability

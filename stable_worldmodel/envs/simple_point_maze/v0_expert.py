@@ -8,7 +8,7 @@ import numpy as np
 
 from ... import keys
 from ...policy import ExpertPolicy
-from .legacy import LAYOUT, MAX_ACTION, WIDTH
+from .v0 import LAYOUT, MAX_ACTION, WIDTH
 
 CELL = 0.05  # grid step (world units)
 _MARGIN = 0.01  # a cell is free when the agent disk grown by this much touches no wall

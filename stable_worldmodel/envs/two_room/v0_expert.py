@@ -8,7 +8,7 @@ import numpy as np
 
 from ... import keys
 from ...policy import ExpertPolicy
-from .legacy import LAYOUT, MAX_DOORS
+from .v0 import LAYOUT, MAX_DOORS
 
 _CLEARANCE = 3.0  # px kept between the agent and the wall faces / door edges
 

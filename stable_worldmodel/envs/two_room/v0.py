@@ -26,7 +26,7 @@ its observed behaviour (same pymunk world, same step, same observation and info)
 - **Info**: 0.0.3's ``pos_agent``, ``pos_goal``, ``n_contacts``, ``goal_pos``, ``goal``,
   ``energy``, ``max_energy``, ``fraction_of_goal``, ``fraction_of_agent``, plus our
   ``goal_state`` (the state with the agent on the goal) and ``goal_proprio``.
-- **Rendering**: see :mod:`.legacy_render` (0.0.3's pygame look, drawn with OpenCV).
+- **Rendering**: see :mod:`.v0_render` (0.0.3's pygame look, drawn with OpenCV).
 """
 
 from __future__ import annotations
@@ -41,8 +41,8 @@ import pymunk
 from ... import keys, spaces
 from ...errors import ConfigError
 from ..base import DatasetResetMixin, apply_variation_options, check_render_size
-from .legacy_overlap import overlap_fractions
-from .legacy_render import CANVAS, draw_frame
+from .v0_overlap import overlap_fractions
+from .v0_render import CANVAS, draw_frame
 
 BORDER = 9
 SIZE = CANVAS - 2 * BORDER  # 494

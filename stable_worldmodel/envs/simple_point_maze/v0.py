@@ -22,7 +22,7 @@ module keeps the id's original meaning, written from the observed behaviour of 0
   sampled ``agent.position`` (at the goal state when ``options["goal_state"]`` is given), plus
   our ``state`` / ``proprio`` (agent position), ``goal_state`` / ``goal_proprio`` (goal
   position) and the private ``_layout`` read by the expert.
-- **Rendering**: :mod:`.legacy_render` (matplotlib, 500 x 500 px native, ``set_render_size``
+- **Rendering**: :mod:`.v0_render` (matplotlib, 500 x 500 px native, ``set_render_size``
   shrinks it).
 
 One deliberate difference: actions are cast to float32 before use, so the position stays
@@ -41,7 +41,7 @@ import numpy as np
 from ... import keys, spaces
 from ...errors import ConfigError, unknown_name
 from ..base import DatasetResetMixin, check_render_size, flatten_values, point_option
-from .legacy_render import NATIVE, MazeCanvas
+from .v0_render import NATIVE, MazeCanvas
 
 WIDTH = HEIGHT = 5.0
 MAX_ACTION = 0.2
