@@ -17,7 +17,8 @@ import time
 
 def run(args: argparse.Namespace) -> list[dict]:
     from stable_worldmodel.cli.stats import SuccessSummary
-    from stable_worldmodel.cli.worlds import (
+    from stable_worldmodel.planning.learned import PlanSettings
+    from stable_worldmodel.planning.policies import (
         episode_limit,
         evaluate_policy,
         make_policy,
@@ -25,7 +26,6 @@ def run(args: argparse.Namespace) -> list[dict]:
         policy_history,
         recording_noise,
     )
-    from stable_worldmodel.planning.learned import PlanSettings
     from stable_worldmodel.train import train
     from stable_worldmodel.wm import get_config_class
 

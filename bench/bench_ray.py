@@ -24,7 +24,7 @@ def main() -> None:
     args = parser.parse_args()
 
     import stable_worldmodel as swm
-    from stable_worldmodel.cli.worlds import episode_limit
+    from stable_worldmodel.planning.policies import episode_limit
     from stable_worldmodel.world import on_ray
 
     limit = episode_limit(args.env)

@@ -49,8 +49,8 @@ def run(args: argparse.Namespace) -> None:
 
     from stable_worldmodel import keys
     from stable_worldmodel.cli.stats import SuccessSummary
-    from stable_worldmodel.cli.worlds import make_policy, make_world
     from stable_worldmodel.planning.learned import PlanSettings
+    from stable_worldmodel.planning.policies import make_policy, make_world
     from stable_worldmodel.train import train
 
     options = {keys.GOAL_STATE: np.asarray(GOAL, np.float32)}

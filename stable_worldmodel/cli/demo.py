@@ -73,7 +73,7 @@ def _record_rollout(env: str, policy: str, path: Path, seed: int, image_size: in
     """One MP4 of ``policy`` on the episode of seed ``seed`` (the first evaluation episode).
 
     A learned model resizes the frames to its own image size; the video keeps ``image_size``."""
-    from .worlds import make_policy, make_world
+    from ..planning.policies import make_policy, make_world
 
     with (
         tempfile.TemporaryDirectory(dir=path.parent) as tmp,
@@ -160,8 +160,15 @@ def demo(
     """
     from ..data import dataset_info, delete_dataset
     from ..data.utils import resolve_dataset_path
+    from ..planning.policies import (
+        episode_limit,
+        evaluate_policy,
+        make_policy,
+        make_world,
+        recording_noise,
+        resolve_env,
+    )
     from .display import console, display_dataset_info, success_table
-    from .worlds import episode_limit, evaluate_policy, make_policy, make_world, recording_noise, resolve_env
 
     env = resolve_env(env)
     max_steps = episode_limit(env, max_steps)

@@ -11,8 +11,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import ConfigError
+from ..planning.policies import checkpoint_run, evaluate_policy, make_policy, make_world, policy_history, reset_options
 from .stats import SuccessSummary
-from .worlds import checkpoint_run, evaluate_policy, make_policy, make_world, policy_history, reset_options
 
 __all__ = ["dataset_starts", "evaluate_cli"]
 

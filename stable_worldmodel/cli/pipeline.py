@@ -131,8 +131,7 @@ def collect(
     from ..data import dataset_info, delete_dataset
     from ..data._index import not_a_file
     from ..data.utils import dataset_file
-    from .display import console, display_dataset_info
-    from .worlds import (
+    from ..planning.policies import (
         check_factors,
         check_policy,
         make_policy,
@@ -141,6 +140,7 @@ def collect(
         reset_options,
         resolve_env,
     )
+    from .display import console, display_dataset_info
 
     env = resolve_env(env)
     policy = check_policy(policy)
@@ -203,9 +203,9 @@ def _collect_on_ray(
     import sys
 
     from ..data import dataset_info, delete_dataset, list_datasets
+    from ..planning.policies import check_factors, episode_limit, make_world, reset_options
     from ..world.on_ray import record_dataset_on_ray
     from .display import console, display_dataset_info
-    from .worlds import check_factors, episode_limit, make_world, reset_options
 
     if num_envs != 1:
         raise typer.BadParameter(
@@ -417,9 +417,10 @@ def eval_cmd(
     (or --policy gc:tr-gcbc for a policy trained with `swm train gcbc`;
     swm eval swm/TwoRoom-v2 --policy expert,wm:tr-lewm --fov-sweep all --json sweep.json: the generalization report)
     """
+    from ..planning.policies import check_policy, episode_limit, resolve_env, run_image_size
     from .display import console, success_table
     from .evaluation import evaluate_cli
-    from .worlds import check_policy, check_run_fits, episode_limit, resolve_env, run_image_size
+    from .worlds import check_run_fits
 
     env = resolve_env(env)
     if (ray or ray_address) and (video is not None or from_dataset is not None):
@@ -518,7 +519,7 @@ def eval_cmd(
 def _factor_count(env_id: str) -> str:
     from .._optional import missing_extra
     from ..envs import get_entry
-    from .worlds import variation_space_of
+    from ..planning.policies import variation_space_of
 
     extra = missing_extra(get_entry(env_id).tags)
     if extra:
@@ -624,10 +625,11 @@ def sweep(
     import json
 
     from ..planning.learned import PlanSettings
+    from ..planning.policies import check_policy, resolve_env, run_image_size
     from .display import console
     from .evaluation import evaluate_cli
     from .sweep import load_sweep_file, run_sweep_file, sweep_heatmap, sweep_json, sweep_table
-    from .worlds import check_policy, check_run_fits, resolve_env, run_image_size
+    from .worlds import check_run_fits
 
     spec = load_sweep_file(file)
     spec["policies"] = [check_policy(p) for p in spec["policies"]]
@@ -664,8 +666,8 @@ def fovs(env: EnvArg) -> None:
 
     Example: swm fovs swm/TwoRoom-v2
     """
+    from ..planning.policies import resolve_env, variation_space_of
     from .display import console, factor_tree
-    from .worlds import resolve_env, variation_space_of
 
     env = resolve_env(env)
     space = variation_space_of(env)

@@ -29,7 +29,7 @@ def sweep_settings(env: str, factors: str) -> list[tuple[str, list[str]]]:
     or group names (checked, with "did you mean").
     """
     from ..errors import ConfigError
-    from .worlds import variation_space_of
+    from ..planning.policies import variation_space_of
 
     space = variation_space_of(env)
     if space is None or not space.names():
@@ -228,7 +228,7 @@ def _setting(entry: Any) -> tuple[str, list[str]]:
 
 def run_sweep_file(spec: dict[str, Any], *, evaluate: Any, plan: Any, **kwargs: Any) -> list[dict[str, Any]]:
     """One report per env (as :func:`run_sweep`), every policy in every setting on the same seeds."""
-    from .worlds import episode_limit, resolve_env, variation_space_of
+    from ..planning.policies import episode_limit, resolve_env, variation_space_of
 
     reports = []
     for env in spec["envs"]:

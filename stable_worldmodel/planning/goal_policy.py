@@ -64,11 +64,11 @@ def load_run(
     ``transform`` its image preprocessing of ``pixels`` and ``goal``, as recorded in
     ``protocol.json`` (upstream checkpoints: 224x224 images with ImageNet statistics).
     """
-    from ..train.trainer import resolve_device
+    from .._device import resolve_device
     from ..wm.preprocess import ImageTransform, Normalizer
     from ..wm.run import Run
 
-    dev = resolve_device(device)
+    dev = resolve_device(device, who="Planning")
     opened = Run.open(run, cache_dir)
     run = opened.name
     model, protocol = opened.load_model(), opened.protocol.to_dict()

@@ -359,7 +359,7 @@ def attach_prediction_panel(
     exists; ``swm train frame --from RUN`` makes it; else the model's own image decoder when it
     has one, as Dreamer), so ``World.record_video`` shows it. Returns the decoder run used
     (``run`` for the model's own decoder), or None when there is none to use."""
-    from ..train.trainer import resolve_device
+    from .._device import resolve_device
     from ..wm.frame import FrameModel, PredictionPanel
     from ..wm.run import Run
     from ..wm.utils import checkpoint_root
@@ -388,7 +388,7 @@ def attach_prediction_panel(
         logger.warning(
             "Frame decoder %r was trained on the latents of %r, not %r: its frames may not mean much", name, source, run
         )
-    frame = frame.to(resolve_device(device)).eval()
+    frame = frame.to(resolve_device(device, who="Planning")).eval()
     policy.prediction_panel = PredictionPanel(
         policy.solver.model, frame, protocol.get("image_mean", (0.5,) * 3), protocol.get("image_std", (0.5,) * 3)
     )

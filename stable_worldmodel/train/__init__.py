@@ -79,10 +79,10 @@ def train(
     encoder (PreJEPA) trains on its features, computed once per dataset and encoder and kept on
     disk (:mod:`stable_worldmodel.train.features`; ``feature_cache=False`` encodes every batch).
     """
+    from .._device import resolve_device
     from ..wm import get_config
     from ..wm import utils as wmu
     from . import distributed
-    from .trainer import resolve_device
 
     _positive("steps", steps)
     _positive("batch_size", batch_size)

@@ -21,6 +21,7 @@ from typing import Any
 
 import torch
 
+from .._device import resolve_device
 from ..errors import ConfigError
 from ..wm import utils as wmu
 from ..wm.base import HasValidationLoss
@@ -33,28 +34,6 @@ logger = logging.getLogger(__name__)
 __all__ = ["TrainResult", "Trainer", "resolve_device"]
 
 PRECISIONS = ("32", "bf16", "16")
-
-
-def resolve_device(device: str | torch.device = "auto") -> torch.device:
-    """``auto`` -> cuda when available, else mps, else cpu; other names are checked."""
-    if str(device) == "auto":
-        if torch.cuda.is_available():
-            return torch.device("cuda")
-        if getattr(torch.backends, "mps", None) is not None and torch.backends.mps.is_available():
-            return torch.device("mps")
-        return torch.device("cpu")
-    try:
-        dev = torch.device(device)
-    except (RuntimeError, TypeError) as exc:
-        raise ConfigError(f"Training requires a device among auto, cpu, cuda, cuda:N, mps, got {device!r}") from exc
-    if dev.type == "cuda" and not torch.cuda.is_available():
-        raise ConfigError(
-            f"Training requires an available device, got {device!r} but torch sees no CUDA GPU; "
-            "use --device auto or cpu"
-        )
-    if dev.type == "mps" and not (getattr(torch.backends, "mps", None) and torch.backends.mps.is_available()):
-        raise ConfigError(f"Training requires an available device, got {device!r} but MPS is not available")
-    return dev
 
 
 def _param_groups(model: torch.nn.Module, lr: float, weight_decay: float, encoder_lr_scale: float) -> list[dict]:

@@ -154,7 +154,7 @@ def _record_shard(
     cache_dir: str,
 ) -> str:
     """One Ray task: record a shard with one env (resuming what a killed attempt committed)."""
-    from ..cli.worlds import make_policy, make_world
+    from ..planning.policies import make_policy, make_world
 
     with make_world(env_id, 1, image_size, max_steps, verbose=0) as world:
         world.set_policy(make_policy(policy, env_id, seed=shard["seed"], noise=noise))
@@ -266,7 +266,7 @@ def _evaluate_chunk(
 ) -> dict[str, list]:
     """One Ray task: evaluate ``policy`` on consecutive ``seeds`` with one env, reading checkpoints
     from the driver's cache folder (a worker of an existing cluster does not inherit its environment)."""
-    from ..cli.worlds import evaluate_policy, make_world
+    from ..planning.policies import evaluate_policy, make_world
 
     os.environ["STABLEWM_HOME"] = cache_dir
 

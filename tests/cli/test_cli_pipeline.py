@@ -137,7 +137,7 @@ def test_eval_prints_success_table(swm):
 
 
 def test_eval_random_matches_world_evaluate(swm):
-    from stable_worldmodel.cli.worlds import evaluate_policy, make_world
+    from stable_worldmodel.planning.policies import evaluate_policy, make_world
 
     result = swm("eval", TOY, "--episodes", "5", "--seed", "11", *SMALL)
     assert result.exit_code == 0
@@ -173,7 +173,7 @@ def test_eval_unknown_env_suggests(swm, error_line):
 
 # -- envs / fovs ---------------------------------------------------------------------------
 def test_envs_lists_every_env_with_factor_count(swm):
-    from stable_worldmodel.cli.worlds import variation_space_of
+    from stable_worldmodel.planning.policies import variation_space_of
 
     result = swm("envs")
     assert result.exit_code == 0

@@ -1,4 +1,11 @@
 """The built-in dataset formats, registered on import (each module is light: readers and
 writers are imported when a format opens one). Detection order: this import order."""
 
-from . import hdf5, video, folder, meta  # noqa: F401  (order matters: video folders are folders too)
+# Detection tries the formats in this order, and video folders are folders too: not sorted.
+# isort: off
+from . import hdf5  # noqa: F401 (imported to register the format)
+from . import video  # noqa: F401 (imported to register the format)
+from . import folder  # noqa: F401 (imported to register the format)
+from . import meta  # noqa: F401 (imported to register the format)
+
+# isort: on
