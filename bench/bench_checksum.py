@@ -1,13 +1,23 @@
-"""Cost of the Fletcher-32 checksum on raw (uncompressed) chunks: HDF5Writer and HDF5Dataset rows/s
-with and without it (``stable_worldmodel.data.writer.CHECKSUM_RAW``).
+"""Cost of the per-row checksums of raw columns (``stable_worldmodel/data/_rowsum.py``): HDF5Writer and
+HDF5Dataset speed with ``HDF5Writer(path, checksum=True)`` (the default) and ``checksum=False``.
 
-    python bench/bench_checksum.py [--episodes 200] [--length 50] [--per-commit 4] [--repeats 5] [--kinds numeric,pixels]
+    python bench/bench_checksum.py [--episodes 1000] [--length 50] [--per-commit 4] [--repeats 7]
+                                   [--kinds numeric,pixels]
 
-Two recordings: ``numeric`` (only small raw columns: the worst case for the checksum) and
-``pixels`` (the same plus a 64x64 RGB image column, gzip-compressed and not checksummed by
-Fletcher-32). Reads: construction with ``preload=True`` (every column decoded), and
-``preload=False`` random items (``num_steps=4``) through the block cache, and a whole-column read.
-Each figure is the best of ``--repeats`` interleaved runs. Prints, never asserts.
+Two recordings: ``numeric`` (only small raw columns: the worst case, every byte is checksummed)
+and ``pixels`` (the same plus a 64x64 RGB image column, gzip-compressed, which has no row checksum).
+Figures (each the best of ``--repeats`` interleaved runs, ``--reads`` times more for the short reads):
+
+* ``write``: recording the file (``--per-commit`` episodes per commit);
+* ``read_preload``: ``HDF5Dataset(preload=True)``: every column read and checked at construction;
+* ``read_column``: one whole raw column (``state``) by a fresh reader: every row checked (a cold read);
+* ``read_column_again``: the same column by the same reader (uncached): checked already, free;
+* ``read_items``: random items (``num_steps=4``, ``preload=False``) through the block cache, from a
+  fresh reader: each block is checked on its first read;
+* ``hash_only``: ``row_checksums`` over the raw columns' rows in memory (the checking's own cost).
+
+``time`` is the extra time the checksums take (+5% = 5% slower). The file size with and without
+checksums is printed too. Prints, never asserts.
 """
 
 from __future__ import annotations
@@ -38,11 +48,10 @@ def episode(ep: int, length: int, pixels: bool) -> dict[str, np.ndarray]:
 
 
 def write(path: Path, episodes: list[dict], per_commit: int, checksum: bool) -> float:
-    from stable_worldmodel.data import writer
+    from stable_worldmodel.data.writer import HDF5Writer
 
-    writer.CHECKSUM_RAW = checksum
     t0 = time.perf_counter()
-    with writer.HDF5Writer(path) as w:
+    with HDF5Writer(path, checksum=checksum) as w:
         for i in range(0, len(episodes), per_commit):
             w.write_episodes(episodes[i : i + per_commit])
     return time.perf_counter() - t0
@@ -69,54 +78,88 @@ def read_items(path: Path, n: int) -> float:
     return elapsed
 
 
-def read_column(path: Path, col: str) -> float:
+def read_column(path: Path, col: str) -> tuple[float, float]:
+    """A whole column by a fresh reader, then again by the same reader."""
     from stable_worldmodel.data import HDF5Dataset
 
     ds = HDF5Dataset(path=path, preload=False)
-    t0 = time.perf_counter()
-    ds.get_col_data(col)
-    elapsed = time.perf_counter() - t0
+    ds.get_col_data("reward")  # the file handle is open and warm: only the column read is timed
+    times = []
+    for _ in range(2):
+        t0 = time.perf_counter()
+        ds.get_col_data(col)
+        times.append(time.perf_counter() - t0)
     ds.close()
-    return elapsed
+    return times[0], times[1]
+
+
+def hash_only(episodes: list[dict]) -> float:
+    from stable_worldmodel.data._rowsum import row_checksums
+    from stable_worldmodel.data.writer import COMPRESS_ROW_BYTES
+
+    columns = [np.concatenate([ep[c] for ep in episodes]) for c in episodes[0]]
+    raw = [c for c in columns if c[0].nbytes < COMPRESS_ROW_BYTES]
+    t0 = time.perf_counter()
+    for c in raw:
+        row_checksums(c, 0)
+    return time.perf_counter() - t0
+
+
+def record(best: dict, what: str, checksum: bool, seconds: float) -> None:
+    best[what, checksum] = min(best.get((what, checksum), float("inf")), seconds)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--episodes", type=int, default=200)
+    parser.add_argument("--episodes", type=int, default=1000)
     parser.add_argument("--length", type=int, default=50)
     parser.add_argument("--per-commit", type=int, default=4, help="episodes per write_episodes call (one per env)")
     parser.add_argument("--items", type=int, default=3000)
-    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--repeats", type=int, default=7)
+    parser.add_argument("--reads", type=int, default=5, help="of each short read per file and repeat")
     parser.add_argument("--kinds", default="numeric,pixels", help="recordings to run, comma-separated")
     args = parser.parse_args()
 
     rows = args.episodes * args.length
     tmp = Path(tempfile.mkdtemp())
-    print(f"{args.episodes} episodes x {args.length} rows = {rows} rows, {args.per_commit} episodes per commit; best of {args.repeats}")
+    print(
+        f"{args.episodes} episodes x {args.length} rows = {rows} rows, {args.per_commit} episodes per commit; "
+        f"best of {args.repeats}"
+    )
     for kind in args.kinds.split(","):
         episodes = [episode(e, args.length, kind == "pixels") for e in range(args.episodes)]
         best: dict[tuple[str, bool], float] = {}
+        sizes: dict[bool, int] = {}
         for r in range(args.repeats):
-            for checksum in (False, True) if r % 2 == 0 else (True, False):  # interleaved: drift hits both
-                path = tmp / f"{kind}_{checksum}_{r}.h5"
-                times = {
-                    "write": write(path, episodes, args.per_commit, checksum),
-                    "read_preload": read_preload(path),
-                    "read_column": read_column(path, "state"),
-                    "read_items": read_items(path, args.items),
-                }
-                for what, t in times.items():
-                    best[what, checksum] = min(best.get((what, checksum), float("inf")), t)
-                path.unlink()
-        print(f"\n[{kind}]")
+            order = (False, True) if r % 2 == 0 else (True, False)  # interleaved: drift hits both
+            paths = {checksum: tmp / f"{kind}_{checksum}_{r}.h5" for checksum in order}
+            for checksum in order:
+                record(best, "write", checksum, write(paths[checksum], episodes, args.per_commit, checksum))
+                sizes[checksum] = paths[checksum].stat().st_size
+            for _ in range(args.reads):  # the reads are short: several of each per file, alternating
+                for checksum in order:
+                    record(best, "read_preload", checksum, read_preload(paths[checksum]))
+                    cold, again = read_column(paths[checksum], "state")
+                    record(best, "read_column", checksum, cold)
+                    record(best, "read_column_again", checksum, again)
+            for checksum in order:
+                record(best, "read_items", checksum, read_items(paths[checksum], args.items))
+                paths[checksum].unlink()
+        hashed = min(hash_only(episodes) for _ in range(args.repeats))
+        grown = 100 * (sizes[True] / sizes[False] - 1)
+        mb = {k: v / 1e6 for k, v in sizes.items()}
+        print(f"\n[{kind}]  file {mb[False]:.2f} MB without, {mb[True]:.2f} MB with checksums ({grown:+.1f}%)")
         for what, unit, n in (
             ("write", "rows/s", rows),
             ("read_preload", "rows/s", rows),
             ("read_column", "rows/s", rows),
+            ("read_column_again", "rows/s", rows),
             ("read_items", "items/s", args.items),
         ):
             off, on = n / best[what, False], n / best[what, True]
-            print(f"{what:13s} without {off:12,.0f} {unit:8s} with {on:12,.0f} {unit:8s} cost {100 * (1 - on / off):+5.1f}%")
+            extra = 100 * (off / on - 1)
+            print(f"{what:18s} without {off:12,.0f} {unit:8s} with {on:12,.0f} {unit:8s} time {extra:+6.1f}%")
+        print(f"{'hash_only':18s} {rows / hashed:12,.0f} rows/s (every raw column of a row)")
 
 
 if __name__ == "__main__":

@@ -9,7 +9,6 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from .._lazy import lazy_getattr
-
 from .utils import get_cache_dir
 
 _ATTRS: dict[str, str] = {
@@ -71,8 +70,6 @@ if TYPE_CHECKING:  # pragma: no cover
     from .dataset import Dataset  # noqa: F401
     from .folder import FolderDataset, FolderWriter, ImageDataset, write_folder_dataset  # noqa: F401
     from .format import FORMATS, Format, detect_format, get_format, list_formats, register_format  # noqa: F401
-    from .normalization import IdentityScaler, PercentileScaler, ZScoreScaler, get_scaler  # noqa: F401
-    from .utils import column_normalizer, load_dataset  # noqa: F401
     from .hdf5 import HDF5Dataset  # noqa: F401
     from .info import (  # noqa: F401
         SpaceInfo,
@@ -87,6 +84,8 @@ if TYPE_CHECKING:  # pragma: no cover
         list_worlds,
         world_info,
     )
+    from .normalization import IdentityScaler, PercentileScaler, ZScoreScaler, get_scaler  # noqa: F401
+    from .utils import column_normalizer, load_dataset  # noqa: F401
     from .video import record_video_from_dataset  # noqa: F401
     from .video_dataset import VideoDataset, VideoWriter, write_video_dataset  # noqa: F401
     from .writer import HDF5Writer  # noqa: F401

@@ -1,14 +1,15 @@
 """HDF5's Fletcher-32 chunk checksum, and re-sealing the raw chunks a killed commit may have torn.
 
-With ``writer.CHECKSUM_RAW``, :func:`~.writer.column_storage` gives raw (uncompressed) columns
-HDF5's Fletcher-32 filter: each chunk is stored as its bytes followed by a 4-byte checksum, which
-HDF5 checks on every read (old files, and files written without it, have none and read as ever). An
-append to a partly filled chunk rewrites it whole, in place, its committed rows with the bytes
-they already hold. A ``kill -9`` in the middle of that write (one ``pwrite`` of several pages) can
-leave the chunk's first pages new and its last ones (the checksum) old: its committed rows are
-intact, but HDF5 refuses the chunk, for reading and for appending. :func:`reseal` stamps a fresh
-checksum on such chunks; the writer calls it when it resumes a file (the only time one can be
-torn is past the committed rows' end, where that writer's commit was under way).
+Kept for files of an earlier version, written with its ``writer.CHECKSUM_RAW`` flag: their raw
+(uncompressed) columns have HDF5's Fletcher-32 filter, each chunk stored as its bytes followed
+by a 4-byte checksum, which HDF5 checks on every read. New files never get it (their raw rows
+carry checksums of their own, see :mod:`._rowsum`): an append to a partly filled Fletcher-32
+chunk rewrites it whole, in place, its committed rows with the bytes they already hold. A
+``kill -9`` in the middle of that write (one ``pwrite`` of several pages) can leave the chunk's
+first pages new and its last ones (the checksum) old: its committed rows are intact, but HDF5
+refuses the chunk, for reading and for appending. :func:`reseal` stamps a fresh checksum on such
+chunks; the writer calls it when it resumes a file (the only time one can be torn is past the
+committed rows' end, where that writer's commit was under way).
 """
 
 from __future__ import annotations

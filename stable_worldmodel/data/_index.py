@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -65,20 +66,29 @@ def _fresh(dset):
     return dset
 
 
-def read_index(f, path: Path, owner: str = "HDF5Dataset") -> tuple[np.ndarray, np.ndarray, list[str]]:
+def read_index(
+    f, path: Path, owner: str = "HDF5Dataset", checksums: dict[str, Any] | None = None
+) -> tuple[np.ndarray, np.ndarray, list[str]]:
     """``(lengths, offsets, columns)`` of open file ``f``, checked: a damaged index raises DatasetFormatError.
 
     ``ep_len`` / ``ep_offset`` must be 1-D integer datasets (``ep_offset`` may hold one more
     entry, from a killed commit), lengths positive, episodes in order and not overlapping,
-    and every column a numeric dataset with rows for every episode.
+    and every column a numeric dataset with rows for every episode. In a file whose rows carry
+    checksums (written by :class:`~.writer.HDF5Writer`, which stores episodes one after the
+    other), a gap between episodes is damage to the index. The checksum datasets
+    (:mod:`._rowsum`) are not columns: ``checksums``, if given, gets each one (refreshed after
+    the index, so that it covers every committed row), by the name of its column.
     """
     import h5py
 
+    from ._rowsum import column_of, is_companion
     from ._superblock import truncation
 
     def bad(what: str) -> DatasetFormatError:
         cut = truncation(path)  # the likely cause of a missing or unreadable object
-        return DatasetFormatError(f"{owner} requires {what} in {path}" + (f", which is truncated ({cut})" if cut else ""))
+        return DatasetFormatError(
+            f"{owner} requires {what} in {path}" + (f", which is truncated ({cut})" if cut else "")
+        )
 
     index = {}
     for name in (keys.EP_LEN, keys.EP_OFFSET):
@@ -109,17 +119,32 @@ def read_index(f, path: Path, owner: str = "HDF5Dataset") -> tuple[np.ndarray, n
                 f"inside episode {e} (rows {offsets[e]}:{ends[e]})"
             )
     end = int(offsets[-1] + lengths[-1]) if len(lengths) else 0
-    columns = []
+    columns, summed = [], False
     for name in f:
         if name in index:
             continue
         dset = f[name]  # not f.items(): it silently skips objects that cannot be opened
         if isinstance(dset, h5py.Group):
             continue  # not a column
-        _fresh(dset)
+        _fresh(dset)  # after the index: a checksum dataset then covers every committed row
+        if is_companion(name):
+            summed = True
+            if checksums is not None:
+                checksums[column_of(name)] = dset
+            continue
         if dset.ndim < 1 or not (np.issubdtype(dset.dtype, np.number) or dset.dtype == np.bool_):
             raise bad(f"numeric columns of one row per step, got {name!r} of shape {dset.shape} and dtype {dset.dtype}")
         if dset.shape[0] < end:
             raise bad(f"{end} rows in every column (the episodes need them), got {dset.shape[0]} in {name!r}")
         columns.append(name)
+    if summed and len(lengths):
+        starts = np.concatenate([[0], np.cumsum(lengths)[:-1]])
+        gap = np.flatnonzero(offsets != starts)
+        if len(gap):
+            e = int(gap[0])
+            raise DatasetFormatError(
+                f"{owner} requires the episodes of {path} one after the other (its rows carry checksums), got "
+                f"ep_offset[{e}] = {offsets[e]} where the episodes before it end at row {starts[e]}: ep_len or "
+                "ep_offset was damaged after it was written; restore the file from a copy or record it again"
+            )
     return lengths, offsets, columns

@@ -48,8 +48,9 @@ def prepare_worker() -> None:
 
     if get_worker_info() is None:  # the main process: leave its pickling alone
         return
-    import torch
     from multiprocessing.reduction import ForkingPickler
+
+    import torch
 
     ForkingPickler.register(torch.Tensor, _reduce_tensor)
     _prepared_pid = pid

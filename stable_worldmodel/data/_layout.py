@@ -80,7 +80,8 @@ class ReleasedLayout(Layout):
         self.lengths = _npz(root / EP_LEN_FILE).astype(np.int64)
         offsets = root / EP_OFFSET_FILE
         self.offsets = (
-            _npz(offsets).astype(np.int64) if offsets.is_file()
+            _npz(offsets).astype(np.int64)
+            if offsets.is_file()
             else np.concatenate([[0], np.cumsum(self.lengths)[:-1]]).astype(np.int64)
         )
         stems = (keys.EP_LEN, keys.EP_OFFSET)

@@ -59,9 +59,13 @@ class _Composite(_TorchDataset):
             raise ConfigError(f"{owner} requires a list of datasets, got {type(datasets).__name__}")
         self.datasets = list(datasets)
         if not self.datasets:
-            raise ConfigError(f"{owner} requires at least one dataset, got an empty list. Need at least one dataset to {self.verb}")
+            raise ConfigError(
+                f"{owner} requires at least one dataset, got an empty list. Need at least one dataset to {self.verb}"
+            )
         if transform is not None and not callable(transform):
-            raise ConfigError(f"{owner} requires transform to be a callable (item dict -> item dict) or None, got {transform!r}")
+            raise ConfigError(
+                f"{owner} requires transform to be a callable (item dict -> item dict) or None, got {transform!r}"
+            )
         self.transform = transform
 
     @property
@@ -88,7 +92,9 @@ class _Composite(_TorchDataset):
     def _same(self, attr: str) -> int:
         values = {int(getattr(ds, attr)) for ds in self.datasets}
         if len(values) != 1:
-            raise ConfigError(f"{type(self).__name__}.{attr} requires members with the same {attr}, got {sorted(values)}")
+            raise ConfigError(
+                f"{type(self).__name__}.{attr} requires members with the same {attr}, got {sorted(values)}"
+            )
         return values.pop()
 
     def _check_index(self, idx: int) -> int:
@@ -126,7 +132,10 @@ class _Composite(_TorchDataset):
         return tuple(np.shape(row[col]))
 
     def __repr__(self) -> str:
-        return f"{type(self).__name__}({len(self.datasets)} datasets, episodes={self.num_episodes}, samples={len(self)}, columns={self.column_names})"
+        return (
+            f"{type(self).__name__}({len(self.datasets)} datasets, episodes={self.num_episodes}, "
+            f"samples={len(self)}, columns={self.column_names})"
+        )
 
 
 class MergeDataset(_Composite):
@@ -169,8 +178,11 @@ class MergeDataset(_Composite):
                 seen.update(out[-1])
             return out
         if len(given) != len(self.datasets) or any(isinstance(k, (str, bytes)) for k in given):
-            raise ConfigError(f"MergeDataset requires keys_from_dataset to hold one list of columns per dataset ({len(self.datasets)}), got {given!r}")
-        for i, (ds, cols) in enumerate(zip(self.datasets, given)):
+            raise ConfigError(
+                "MergeDataset requires keys_from_dataset to hold one list of columns per dataset "
+                f"({len(self.datasets)}), got {given!r}"
+            )
+        for i, (ds, cols) in enumerate(zip(self.datasets, given, strict=False)):
             for col in cols:
                 if col not in ds.column_names:
                     raise _missing(f"MergeDataset (dataset {i})", col, ds.column_names)
@@ -191,7 +203,7 @@ class MergeDataset(_Composite):
         return _clip(self.datasets[0], self._check_index(idx))
 
     def _merge(self, parts: Sequence[Mapping[str, Any]]) -> dict[str, Any]:
-        return {k: part[k] for part, cols in zip(parts, self.keys_map) for k in cols if k in part}
+        return {k: part[k] for part, cols in zip(parts, self.keys_map, strict=False) for k in cols if k in part}
 
     def __getitem__(self, idx: int) -> dict[str, Any]:
         i = self._check_index(idx)
@@ -199,16 +211,18 @@ class MergeDataset(_Composite):
 
     def load_chunk(self, episodes_idx: Sequence[int], start: Sequence[int], end: Sequence[int]) -> list[dict]:
         chunks = [ds.load_chunk(episodes_idx, start, end) for ds in self.datasets]
-        return [self._merge(parts) for parts in zip(*chunks)]
+        return [self._merge(parts) for parts in zip(*chunks, strict=False)]
 
     def get_col_data(self, col: str) -> np.ndarray:
-        for ds, cols in zip(self.datasets, self.keys_map):
+        for ds, cols in zip(self.datasets, self.keys_map, strict=False):
             if col in cols:
                 return ds.get_col_data(col)
         raise _missing("MergeDataset", col, self.column_names)
 
     def get_row_data(self, row_idx: int | Sequence[int]) -> dict[str, Any]:
-        return self._merge([ds.get_row_data(row_idx) if cols else {} for ds, cols in zip(self.datasets, self.keys_map)])
+        return self._merge(
+            [ds.get_row_data(row_idx) if cols else {} for ds, cols in zip(self.datasets, self.keys_map, strict=False)]
+        )
 
 
 class ConcatDataset(_Composite):
@@ -260,7 +274,7 @@ class ConcatDataset(_Composite):
         for d in np.unique(members):
             mask = members == d
             chunks = self.datasets[d].load_chunk(eps[mask] - self._ep_cum[d], starts[mask], ends[mask])
-            for i, chunk in zip(np.flatnonzero(mask), chunks):
+            for i, chunk in zip(np.flatnonzero(mask), chunks, strict=False):
                 out[i] = chunk
         return out  # type: ignore[return-value]
 
@@ -269,7 +283,10 @@ class ConcatDataset(_Composite):
         if len(lacking) == len(self.datasets):
             raise _missing("ConcatDataset", col, self.column_names)
         if lacking:
-            raise UnknownNameError(f"ConcatDataset column {col!r} not found in datasets {lacking}: its rows would not line up with the episodes")
+            raise UnknownNameError(
+                f"ConcatDataset column {col!r} not found in datasets {lacking}: "
+                "its rows would not line up with the episodes"
+            )
         return np.concatenate([np.asarray(ds.get_col_data(col)) for ds in self.datasets])
 
     def get_row_data(self, row_idx: int | Sequence[int]) -> dict[str, Any]:
@@ -279,7 +296,7 @@ class ConcatDataset(_Composite):
         if rows.size and (rows.min() < 0 or rows.max() >= n):
             raise IndexError(f"ConcatDataset row {np.asarray(row_idx).tolist()} out of range for {n} rows")
         members = np.searchsorted(self._row_cum, rows, side="right") - 1
-        found = [self.datasets[d].get_row_data(int(r - self._row_cum[d])) for d, r in zip(members, rows)]
+        found = [self.datasets[d].get_row_data(int(r - self._row_cum[d])) for d, r in zip(members, rows, strict=False)]
         if np.ndim(row_idx) == 0:
             return found[0]
         common = [k for k in found[0] if all(k in f for f in found)] if found else []
@@ -309,7 +326,8 @@ class GoalDataset(_TorchDataset):
         probs = np.asarray(goal_probabilities, np.float64)
         if probs.shape != (3,) or np.any(probs < 0) or not np.isclose(probs.sum(), 1.0):
             raise ConfigError(
-                "GoalDataset requires goal_probabilities to be a 3-tuple of non-negative numbers (p_random, p_future, p_current) "
+                "GoalDataset requires goal_probabilities to be a 3-tuple of non-negative numbers "
+                "(p_random, p_future, p_current) "
                 f"that sum to 1.0, got {goal_probabilities}"
             )
         if not 0.0 <= float(gamma) < 1.0:
@@ -323,7 +341,9 @@ class GoalDataset(_TorchDataset):
         if self.episode_offsets is None:  # a dataset-like without offsets: episodes back to back
             self.episode_offsets = np.concatenate([[0], np.cumsum(self.episode_lengths)[:-1]]).astype(np.int64)
         if goal_keys is None:
-            goal_keys = {c: keys.goal_key(c) for c in (keys.PIXELS, keys.PROPRIO, keys.STATE) if c in dataset.column_names}
+            goal_keys = {
+                c: keys.goal_key(c) for c in (keys.PIXELS, keys.PROPRIO, keys.STATE) if c in dataset.column_names
+            }
         self.goal_keys = dict(goal_keys)
         for col in self.goal_keys:
             if col not in _stored(dataset):

@@ -51,7 +51,10 @@ def _positive(name: str, value: Any, owner: str) -> int:
 
 def missing_column(owner: str, name: str, columns: Sequence[str]) -> UnknownNameError:
     """``UnknownNameError`` (a KeyError) for a column ``name`` that ``owner`` does not have."""
-    return UnknownNameError(f"{owner} column {name!r} not found.{did_you_mean(str(name), columns)} Columns: {', '.join(columns) or '(none)'}")
+    return UnknownNameError(
+        f"{owner} column {name!r} not found.{did_you_mean(str(name), columns)} "
+        f"Columns: {', '.join(columns) or '(none)'}"
+    )
 
 
 def image_like(arr: np.ndarray) -> bool:
@@ -63,9 +66,14 @@ def _episode_array(name: str, value: Any, owner: str) -> np.ndarray:
     """``value`` as a 1-D int64 array of non-negative row counts or offsets."""
     arr = np.asarray(value)
     if arr.ndim != 1 or not (arr.size == 0 or np.issubdtype(arr.dtype, np.integer)) or (arr.size and arr.min() < 0):
-        hint = ("; frameskip, num_steps and transform now follow lengths and offsets: pass them by keyword"
-                if arr.ndim == 0 else "")
-        raise ConfigError(f"{owner} requires {name} to be a 1-D sequence of non-negative ints (one per episode), got {value!r}{hint}")
+        hint = (
+            "; frameskip, num_steps and transform now follow lengths and offsets: pass them by keyword"
+            if arr.ndim == 0
+            else ""
+        )
+        raise ConfigError(
+            f"{owner} requires {name} to be a 1-D sequence of non-negative ints (one per episode), got {value!r}{hint}"
+        )
     return arr.astype(np.int64)
 
 
@@ -94,14 +102,22 @@ class Dataset(_TorchDataset):
         self.frameskip = _positive("frameskip", frameskip, owner)
         self.num_steps = _positive("num_steps", num_steps, owner)
         if transform is not None and not callable(transform):
-            raise ConfigError(f"{owner} requires transform to be a callable (item dict -> item dict) or None, got {transform!r}")
+            raise ConfigError(
+                f"{owner} requires transform to be a callable (item dict -> item dict) or None, got {transform!r}"
+            )
         self.transform = transform
         if keys_to_load is not None:
             if isinstance(keys_to_load, (str, bytes)):
-                raise ConfigError(f"{owner} requires keys_to_load to be a list of column names, got the string {keys_to_load!r}; write [{keys_to_load!r}]")
+                raise ConfigError(
+                    f"{owner} requires keys_to_load to be a list of column names, "
+                    f"got the string {keys_to_load!r}; write [{keys_to_load!r}]"
+                )
             keys_to_load = list(keys_to_load)
             if not keys_to_load or not all(isinstance(k, str) for k in keys_to_load):
-                raise ConfigError(f"{owner} requires keys_to_load to be a non-empty list of column names (or None for all), got {keys_to_load!r}")
+                raise ConfigError(
+                    f"{owner} requires keys_to_load to be a non-empty list of column names "
+                    f"(or None for all), got {keys_to_load!r}"
+                )
         self._keys_to_load = keys_to_load
         self._index: tuple[np.ndarray, np.ndarray] | None = None
         self._clips: list[tuple[int, int]] | None = None  # set only through ``clip_indices = ...``
@@ -116,7 +132,8 @@ class Dataset(_TorchDataset):
         lengths = np.asarray(self.lengths)
         if len(lengths) and int(lengths.max()) < self.span:
             raise ConfigError(
-                f"{type(self).__name__} requires num_steps * frameskip <= the longest episode ({int(lengths.max())} rows), "
+                f"{type(self).__name__} requires num_steps * frameskip <= the longest episode "
+                f"({int(lengths.max())} rows), "
                 f"got num_steps={self.num_steps} * frameskip={self.frameskip} = {self.span}: no sample fits; "
                 "lower num_steps (history) / frameskip or record longer episodes"
             )
@@ -157,7 +174,9 @@ class Dataset(_TorchDataset):
     def offsets(self, value: Sequence[int] | np.ndarray) -> None:
         arr = _episode_array("offsets", value, type(self).__name__)
         if hasattr(self, "_lengths") and len(arr) != len(self._lengths):
-            raise ConfigError(f"{type(self).__name__} requires one offset per episode ({len(self._lengths)}), got {len(arr)} offsets")
+            raise ConfigError(
+                f"{type(self).__name__} requires one offset per episode ({len(self._lengths)}), got {len(arr)} offsets"
+            )
         self._offsets = arr
         self._index = None
 
@@ -329,7 +348,9 @@ class Dataset(_TorchDataset):
         if len(indices) == 0:
             return []
         batch = self._batch(indices)
-        items = [dict(zip(batch, views)) for views in zip(*(v.unbind(0) for v in batch.values()))]
+        items = [
+            dict(zip(batch, views, strict=False)) for views in zip(*(v.unbind(0) for v in batch.values()), strict=False)
+        ]
         if self.transform is not None:
             items = [self.transform(item) for item in items]
         return items
@@ -338,7 +359,9 @@ class Dataset(_TorchDataset):
         """Every loaded column of episode ``ep`` as tensors ``(L, ...)`` (images ``(L, C, H, W)``)."""
         lengths = self.lengths
         if isinstance(ep, bool) or not isinstance(ep, (int, np.integer)):
-            raise ArgumentTypeError(f"{type(self).__name__}.load_episode requires an int episode index, got {ep!r} ({type(ep).__name__})")
+            raise ArgumentTypeError(
+                f"{type(self).__name__}.load_episode requires an int episode index, got {ep!r} ({type(ep).__name__})"
+            )
         if not -len(lengths) <= ep < len(lengths):
             raise IndexError(f"{type(self).__name__} episode {ep} out of range for {len(lengths)} episodes")
         if self._from_slices:
@@ -347,7 +370,9 @@ class Dataset(_TorchDataset):
         stop = start + int(lengths[ep])
         return to_tensors({col: self._read(col, start, stop) for col in self.keys_to_load})
 
-    def load_chunk(self, episodes_idx: Sequence[int], start: Sequence[int] | int, end: Sequence[int] | int) -> list[dict]:
+    def load_chunk(
+        self, episodes_idx: Sequence[int], start: Sequence[int] | int, end: Sequence[int] | int
+    ) -> list[dict]:
         """Steps ``start[i]:end[i]`` of episode ``episodes_idx[i]`` (raw rows, as tensors) for each i.
 
         A 0.0.3-style subclass gets what its ``_load_slice`` returns, ``action`` grouped by
@@ -357,7 +382,7 @@ class Dataset(_TorchDataset):
         starts = np.broadcast_to(np.asarray(start), (len(episodes_idx),))
         ends = np.broadcast_to(np.asarray(end), (len(episodes_idx),))
         out = []
-        for ep, s, e in zip(episodes_idx, starts, ends):
+        for ep, s, e in zip(episodes_idx, starts, ends, strict=False):
             length = int(self.lengths[ep])
             if not 0 <= s < e <= length:
                 raise ConfigError(
@@ -377,9 +402,13 @@ class Dataset(_TorchDataset):
     def get_col_data(self, col: str) -> np.ndarray:
         """Every committed row of column ``col`` as a numpy array ``(N, ...)``."""
         self.check_keys([col])
-        return np.concatenate(
-            [self._read(col, int(o), int(o) + int(n)) for o, n in zip(self.offsets, self.lengths)]
-        ) if self.num_episodes else self._read(col, 0, 0)
+        return (
+            np.concatenate(
+                [self._read(col, int(o), int(o) + int(n)) for o, n in zip(self.offsets, self.lengths, strict=False)]
+            )
+            if self.num_episodes
+            else self._read(col, 0, 0)
+        )
 
     def row_shape(self, col: str) -> tuple[int, ...]:
         """Shape of one row of column ``col``."""
@@ -430,12 +459,15 @@ def to_tensors(item: dict[str, np.ndarray], batch: bool = False, owned: bool = F
 from .._lazy import lazy_getattr as _lazy_getattr  # noqa: E402
 
 _HOME = "stable_worldmodel.data."
-__getattr__ = _lazy_getattr(__name__, {
-    "HDF5Dataset": _HOME + "hdf5",
-    "FolderDataset": _HOME + "folder",
-    "ImageDataset": _HOME + "folder",
-    "VideoDataset": _HOME + "video_dataset",
-    "MergeDataset": _HOME + "compose",
-    "ConcatDataset": _HOME + "compose",
-    "GoalDataset": _HOME + "compose",
-})
+__getattr__ = _lazy_getattr(
+    __name__,
+    {
+        "HDF5Dataset": _HOME + "hdf5",
+        "FolderDataset": _HOME + "folder",
+        "ImageDataset": _HOME + "folder",
+        "VideoDataset": _HOME + "video_dataset",
+        "MergeDataset": _HOME + "compose",
+        "ConcatDataset": _HOME + "compose",
+        "GoalDataset": _HOME + "compose",
+    },
+)

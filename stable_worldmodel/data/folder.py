@@ -78,7 +78,9 @@ class FolderDataset(Dataset):
         self.path = Path(path).expanduser() if path is not None else resolve_dataset_dir(name, cache_dir)
         self.layout: Layout = open_layout(self.path, owner)
         if isinstance(self.layout, MetaLayout) and self.layout.kind != self.meta_kind:
-            raise DatasetFormatError(f"{owner} requires a {self.meta_kind!r} dataset, got format {self.layout.kind!r} in {self.path}")
+            raise DatasetFormatError(
+                f"{owner} requires a {self.meta_kind!r} dataset, got format {self.layout.kind!r} in {self.path}"
+            )
         self.lengths, self.offsets = self.layout.lengths, self.layout.offsets
         self.folder_keys = self._media_keys(folder_keys)
         self._arrays: dict[str, np.ndarray] = {}
@@ -105,14 +107,18 @@ class FolderDataset(Dataset):
             if wrong:
                 reader = "FolderDataset" if other == "image" else "VideoDataset"
                 raise DatasetFormatError(
-                    f"{owner} requires {self.media_kind} folders, got {other} files in {wrong} of {self.path}: open it with {reader}"
+                    f"{owner} requires {self.media_kind} folders, got {other} files in {wrong} of {self.path}: "
+                    f"open it with {reader}"
                 )
             return found
         if isinstance(given, (str, bytes)):
             raise ConfigError(f"{owner} requires a list of media keys, got the string {given!r}; write [{given!r}]")
         for col in given:
             if col not in self.layout.media:
-                raise ConfigError(f"{owner} media key {col!r} not found: {str(self.path / str(col))!r} does not exist; sub-folders: {self.layout.media}")
+                raise ConfigError(
+                    f"{owner} media key {col!r} not found: {str(self.path / str(col))!r} does not exist; "
+                    f"sub-folders: {self.layout.media}"
+                )
         return list(given)
 
     @property
@@ -196,14 +202,20 @@ class FolderWriter:
             raise ConfigError(f"{owner} requires 1 <= quality <= 100, got {quality!r}")
         self.path, self.mode, self.quality = Path(path), mode, int(quality)
         if (self.path / META).is_file():
-            raise DatasetFormatError(f"{owner} requires a folder in the released layout, got {self.path}, which holds our earlier {META} layout")
+            raise DatasetFormatError(
+                f"{owner} requires a folder in the released layout, got {self.path}, "
+                f"which holds our earlier {META} layout"
+            )
         self._lengths: list[int] = []
         self._numeric: dict[str, list[np.ndarray]] = {}
         self._schema: dict[str, tuple[bool, tuple[int, ...], np.dtype]] = {}
         self._closed = False
         if (self.path / EP_LEN_FILE).is_file():
             if mode == "error":
-                raise FileExistsError(f"{owner} requires a new folder with mode='error', got {str(self.path)!r}, which already holds a dataset; pass mode='append' or 'overwrite'")
+                raise FileExistsError(
+                    f"{owner} requires a new folder with mode='error', got {str(self.path)!r}, "
+                    "which already holds a dataset; pass mode='append' or 'overwrite'"
+                )
             if mode == "overwrite":
                 self._clear()
             else:
@@ -237,19 +249,26 @@ class FolderWriter:
         cols = {str(k): np.asarray(v) for k, v in episode.items()}
         sizes = {k: len(v) if v.ndim else 0 for k, v in cols.items()}
         if not cols or len(set(sizes.values())) != 1 or 0 in sizes.values():
-            raise ConfigError(f"{owner} requires an episode of columns with the same number of rows (at least 1), got {sizes}")
+            raise ConfigError(
+                f"{owner} requires an episode of columns with the same number of rows (at least 1), got {sizes}"
+            )
         for k, v in cols.items():
             if v.dtype.kind in "OUSV":
                 raise ConfigError(f"{owner} requires numeric or bool columns, got {k!r} of dtype {v.dtype}")
         if not self._schema:
             self._schema = {k: (is_media(v), v.shape[1:], v.dtype) for k, v in cols.items()}
         elif set(cols) != set(self._schema):
-            raise DatasetFormatError(f"{owner} requires the columns of the dataset {sorted(self._schema)}, got {sorted(cols)}")
+            raise DatasetFormatError(
+                f"{owner} requires the columns of the dataset {sorted(self._schema)}, got {sorted(cols)}"
+            )
         for k, v in cols.items():
             media, shape, dtype = self._schema[k]
             known = shape if not media or shape else v.shape[1:]  # a resumed media column: any frame size
             if media != is_media(v) or v.shape[1:] != known or v.dtype != dtype:
-                raise DatasetFormatError(f"{owner} requires column {k!r} rows of shape {shape} and dtype {dtype}, got {v.shape[1:]} {v.dtype}")
+                raise DatasetFormatError(
+                    f"{owner} requires column {k!r} rows of shape {shape} and dtype {dtype}, "
+                    f"got {v.shape[1:]} {v.dtype}"
+                )
         return next(iter(sizes.values())), cols
 
     def write_episode(self, episode: Mapping[str, Any]) -> None:
@@ -288,7 +307,9 @@ class FolderWriter:
         for col, parts in self._numeric.items():
             _save_npz(self.path / f"{col}.npz", np.concatenate(parts))
         lengths = np.asarray(self._lengths, np.int32)
-        _save_npz(self.path / EP_OFFSET_FILE, np.concatenate([[0], np.cumsum(lengths, dtype=np.int64)[:-1]]).astype(np.int64))
+        _save_npz(
+            self.path / EP_OFFSET_FILE, np.concatenate([[0], np.cumsum(lengths, dtype=np.int64)[:-1]]).astype(np.int64)
+        )
         _save_npz(self.path / EP_LEN_FILE, lengths)
 
     def __enter__(self) -> FolderWriter:
@@ -300,7 +321,7 @@ class FolderWriter:
 
 def episodes_of(dataset: Dataset) -> Iterator[dict[str, np.ndarray]]:
     """Every episode of ``dataset`` (one of our datasets) as raw rows ``{col: (L, ...)}``."""
-    for offset, length in zip(dataset.offsets, dataset.lengths):
+    for offset, length in zip(dataset.offsets, dataset.lengths, strict=False):
         start, stop = int(offset), int(offset) + int(length)
         yield {col: dataset._read(col, start, stop) for col in dataset.stored_columns}
 

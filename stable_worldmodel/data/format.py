@@ -50,11 +50,15 @@ class Format:
 
     @classmethod
     def open_reader(cls, path: str | os.PathLike, **kwargs: Any) -> Any:
-        raise NotImplementedError(f"format {cls.name!r} does not support reading: open_reader(path, **kwargs) -> Dataset")
+        raise NotImplementedError(
+            f"format {cls.name!r} does not support reading: open_reader(path, **kwargs) -> Dataset"
+        )
 
     @classmethod
     def open_writer(cls, path: str | os.PathLike, **kwargs: Any) -> Any:
-        raise NotImplementedError(f"format {cls.name!r} does not support writing (read-only): open_writer(path, **kwargs) -> writer")
+        raise NotImplementedError(
+            f"format {cls.name!r} does not support writing (read-only): open_writer(path, **kwargs) -> writer"
+        )
 
     @classmethod
     def summary(cls, path: str | os.PathLike) -> dict[str, Any]:
@@ -72,10 +76,14 @@ def register_format(cls: type[Format]) -> type[Format]:
     """Class decorator adding ``cls`` to :data:`FORMATS` under ``cls.name``."""
     name = getattr(cls, "name", "")
     if not isinstance(name, str) or not name:
-        raise ConfigError(f"register_format requires a class with a non-empty string `name`, got {cls.__name__} with name={name!r}")
+        raise ConfigError(
+            f"register_format requires a class with a non-empty string `name`, got {cls.__name__} with name={name!r}"
+        )
     known = FORMATS.get(name)
     if known is not None and known.__qualname__ != cls.__qualname__:
-        raise ConfigError(f"register_format requires a new format name, got {name!r}, already registered by {known.__qualname__}")
+        raise ConfigError(
+            f"register_format requires a new format name, got {name!r}, already registered by {known.__qualname__}"
+        )
     FORMATS[name] = cls
     return cls
 
@@ -94,7 +102,10 @@ def get_format(name: str) -> type[Format]:
     """The format registered as ``name``; unknown names raise :class:`ConfigError` (a ValueError) with a suggestion."""
     _builtins()
     if name not in FORMATS:
-        raise ConfigError(f"get_format requires a registered format ({', '.join(FORMATS)}), got {name!r} (not found).{did_you_mean(str(name), FORMATS)}")
+        raise ConfigError(
+            f"get_format requires a registered format ({', '.join(FORMATS)}), got {name!r} "
+            f"(not found).{did_you_mean(str(name), FORMATS)}"
+        )
     return FORMATS[name]
 
 

@@ -6,6 +6,11 @@ windows cost a numpy slice instead of an HDF5 call and a decompression. The file
 lazily, once per process (DataLoader workers each open their own handle); a file that is
 still being recorded can be read: only committed episodes (``ep_len`` / ``ep_offset``)
 are visible.
+
+Rows of a raw column that carry checksums (:mod:`._rowsum`) are checked the first time this
+reader reads them, whatever the path (items, windows, whole columns, preloading); a damaged
+row raises :class:`DatasetFormatError` naming the file, column and row. Compressed chunks
+are checked by their filter (zlib's Adler-32), a failure raising the same error.
 """
 
 from __future__ import annotations
@@ -26,10 +31,10 @@ import numpy as np
 
 from .. import keys
 from ..errors import ConfigError, DatasetFormatError
-from . import _superblock
+from . import _rowsum, _superblock
+from ._index import H5_READ_ERRORS, check_file, damaged, read_index
 from .dataset import Dataset
 from .utils import resolve_dataset_path
-from ._index import H5_READ_ERRORS, check_file, damaged, read_index
 from .writer import is_image_column
 
 logger = logging.getLogger(__name__)
@@ -61,7 +66,9 @@ def _set_read_attempts():
         with contextlib.suppress(OSError), open("/proc/self/maps") as fh:
             candidates += sorted({line.split()[-1] for line in fh if re.search(r"/libhdf5[-.][^/]*$", line.strip())})
     package = Path(h5py.__file__).parent
-    candidates += glob.glob(str(package.parent / "h5py.libs" / "libhdf5-*")) + glob.glob(str(package / ".dylibs" / "libhdf5*"))
+    candidates += glob.glob(str(package.parent / "h5py.libs" / "libhdf5-*")) + glob.glob(
+        str(package / ".dylibs" / "libhdf5*")
+    )
     candidates += [ctypes.util.find_library("hdf5")]
     for candidate in filter(None, candidates):
         try:
@@ -98,8 +105,9 @@ def _is_filter_failure(exc: BaseException) -> bool:
 def _retry_torn(read: Callable[[], Any]) -> Any:
     """``read()``, tried again while a chunk fails its checksum (up to :data:`TORN_RETRIES` times).
 
-    A writer appending to a file whose raw chunks carry checksums (``writer.CHECKSUM_RAW``) rewrites
-    the partly filled chunk of each column whole, in place (see :mod:`._checksum`); a read that
+    A writer appending to a file whose raw chunks carry Fletcher-32 checksums (as an earlier version
+    could write them) rewrites the partly filled chunk of each column whole, in place (see
+    :mod:`._checksum`); a read that
     overlaps that write can see the first pages of one version and the checksum of the other. Read
     again once the write is over, it holds; a damaged chunk still fails, some 60 ms later.
     """
@@ -162,7 +170,9 @@ def open_h5(path: str | os.PathLike):
             if i == len(attempts) - 1:
                 if _superblock.truncation(path):
                     raise damaged("HDF5Dataset", Path(path), exc) from exc
-                raise DatasetFormatError(f"HDF5Dataset requires a readable HDF5 file, got {str(path)!r}: {exc}") from exc
+                raise DatasetFormatError(
+                    f"HDF5Dataset requires a readable HDF5 file, got {str(path)!r}: {exc}"
+                ) from exc
     raise AssertionError("unreachable")  # pragma: no cover
 
 
@@ -207,7 +217,9 @@ class HDF5Dataset(Dataset):
     ):
         super().__init__(frameskip=frameskip, num_steps=num_steps, transform=transform, keys_to_load=keys_to_load)
         if (name is None) == (path is None):
-            raise ConfigError(f"HDF5Dataset requires a dataset name or path=, got {'neither' if name is None else 'both'}")
+            raise ConfigError(
+                f"HDF5Dataset requires a dataset name or path=, got {'neither' if name is None else 'both'}"
+            )
         self.path = Path(path).expanduser() if path is not None else resolve_dataset_path(name, cache_dir)
         sharded = self.path.is_dir() and self.path.suffix != ".h5"  # a folder named x.h5 is a mistake, not shards
         self._shards = shard_files(self.path, "HDF5Dataset") if sharded else [self.path]
@@ -217,6 +229,7 @@ class HDF5Dataset(Dataset):
         self._file = None
         self._pid = None
         self._blocks: dict[str, OrderedDict] = {}
+        self._verified: list[dict[str, _rowsum.Verified]] = []  # per shard: the columns with checksums
         try:
             _retry_torn(self._read_indexes)
         except H5_READ_ERRORS as exc:  # h5py: damaged metadata
@@ -244,18 +257,22 @@ class HDF5Dataset(Dataset):
 
     def _read_indexes(self) -> None:
         """The episode index over every shard: offsets shifted by the rows of the shards before."""
-        lengths, offsets, self._bases, self._episode_bases = [], [], [], []
+        lengths, offsets, self._bases, self._episode_bases, self._verified = [], [], [], [], []
         base = 0
         for i, f in enumerate(self._handles()):
-            ls, os_, columns = read_index(f, self._shards[i])
+            sums: dict[str, Any] = {}
+            ls, os_, columns = read_index(f, self._shards[i], checksums=sums)
             if i == 0:
                 self._columns = columns
                 self._describe_columns(f)
-            elif sorted(columns) != sorted(self._columns) or any(tuple(f[k].shape[1:]) != self._shapes[k][0] for k in columns):
+            elif sorted(columns) != sorted(self._columns) or any(
+                tuple(f[k].shape[1:]) != self._shapes[k][0] for k in columns
+            ):
                 raise DatasetFormatError(
                     f"HDF5Dataset requires every shard to have the columns and shapes of {self._shards[0].name}, "
                     f"got {self._shards[i].name} with columns {sorted(columns)}"
                 )
+            self._verified.append(self._checksummed(self._shards[i], sums, int(os_[-1] + ls[-1]) if len(ls) else 0))
             self._bases.append(base)
             self._episode_bases.append(sum(len(x) for x in lengths))
             lengths.append(ls)
@@ -264,11 +281,25 @@ class HDF5Dataset(Dataset):
         self._bases.append(base)
         self._lengths, self._offsets = np.concatenate(lengths), np.concatenate(offsets)
 
+    def _checksummed(self, path: Path, sums: dict[str, Any], end: int) -> dict[str, _rowsum.Verified]:
+        """What to check in a file (``path``): its columns with checksums (``sums``: their
+        datasets, as :func:`read_index` found them), each up to the committed rows (``end``)
+        that have one, by the HDF5 chunks of the first shard's column."""
+        return {
+            col: _rowsum.Verified(path, col, self._chunk_rows[col], min(end, dset.shape[0]))
+            for col, dset in sums.items()
+            if col in self._shapes and _rowsum.is_checksum_dataset(dset, *self._shapes[col])
+        }
+
     def _describe_columns(self, f) -> None:
-        self._shapes = {k: (tuple(f[k].shape[1:]), f[k].dtype) for k in self._columns}
+        dsets = {k: f[k] for k in self._columns}
+        self._shapes = {k: (tuple(d.shape[1:]), d.dtype) for k, d in dsets.items()}
+        self._chunk_rows = {k: d.chunks[0] if d.chunks else 1 for k, d in dsets.items()}
         self._images = {k for k, (shape, dtype) in self._shapes.items() if is_image_column(shape, dtype)}
-        self._block_rows = {k: self._choose_block(f[k]) for k in self._columns}
-        self._max_blocks = {k: max(8, CACHE_BYTES // max(self._block_rows[k] * self._row_bytes(k), 1)) for k in self._columns}
+        self._block_rows = {k: self._choose_block(d) for k, d in dsets.items()}
+        self._max_blocks = {
+            k: max(8, CACHE_BYTES // max(self._block_rows[k] * self._row_bytes(k), 1)) for k in self._columns
+        }
 
     # -- file handle --------------------------------------------------------------------------
     def _handles(self) -> list:
@@ -348,11 +379,14 @@ class HDF5Dataset(Dataset):
         return rows[start - b0 * size : stop - b0 * size]
 
     def _rows(self, col: str, start: int, stop: int) -> np.ndarray:
-        """Rows ``start:stop`` of ``col`` from the file (the shards); a damaged file raises :class:`DatasetFormatError`."""
+        """Rows ``start:stop`` of ``col`` from the file (the shards); a damaged file raises
+        :class:`DatasetFormatError`."""
         try:
             return _retry_torn(lambda: self._read_rows(col, start, stop))
         except (OSError, RuntimeError) as exc:
-            if any(t in str(exc).lower() for t in ("plugin", "not registered", "required filter")):  # an unknown compression filter
+            if any(
+                t in str(exc).lower() for t in ("plugin", "not registered", "required filter")
+            ):  # an unknown compression filter
                 raise DatasetFormatError(
                     f"HDF5Dataset requires the compression filter of column {col!r} of {self.path}, got: {exc}; "
                     "install it with: pip install hdf5plugin"
@@ -363,20 +397,35 @@ class HDF5Dataset(Dataset):
                     f"of column {col!r} of {self.path}: {exc}; restore the file from a copy (a recording killed "
                     "in the middle of a commit is repaired by resuming it: open an HDF5Writer on it)"
                 ) from exc
-            raise DatasetFormatError(f"HDF5Dataset could not read rows {start}:{stop} of column {col!r} of {self.path} (damaged?): {exc}") from exc
+            raise DatasetFormatError(
+                f"HDF5Dataset could not read rows {start}:{stop} of column {col!r} of {self.path} (damaged?): {exc}"
+            ) from exc
 
     def _read_rows(self, col: str, start: int, stop: int) -> np.ndarray:
-        """Rows ``start:stop`` of ``col`` as h5py reads them (its errors unchanged)."""
+        """Rows ``start:stop`` of ``col`` as h5py reads them (its errors unchanged), checked
+        against their checksums (a mismatch raises :class:`DatasetFormatError`)."""
         files = self._handles()
         if len(files) == 1:
-            return files[0][col][start:stop]
+            return self._checked(0, col, start, stop)
         renumber = col in (keys.EP_IDX, keys.EPISODE_ID)  # episode numbers count across shards
-        parts = [f[col][max(start, lo) - lo:min(stop, hi) - lo] + (eb if renumber else 0)
-                 for f, lo, hi, eb in zip(files, self._bases[:-1], self._bases[1:], self._episode_bases)
-                 if max(start, lo) < min(stop, hi)]
+        spans = zip(self._bases[:-1], self._bases[1:], self._episode_bases, strict=True)
+        parts = [
+            self._checked(i, col, max(start, lo) - lo, min(stop, hi) - lo) + (eb if renumber else 0)
+            for i, (lo, hi, eb) in enumerate(spans)
+            if max(start, lo) < min(stop, hi)
+        ]
         if not parts:
             return files[0][col][0:0]
         return parts[0] if len(parts) == 1 else np.concatenate(parts)
+
+    def _checked(self, shard: int, col: str, start: int, stop: int) -> np.ndarray:
+        """Rows ``start:stop`` of ``col`` in shard ``shard`` (its own row numbers), checked."""
+        f = self._handles()[shard]  # datasets are opened per read: one kept open breaks another reader's refresh()
+        rows = f[col][start:stop]
+        verified = self._verified[shard].get(col)
+        if verified is not None:
+            verified.check(lambda: f[_rowsum.companion(col)], rows, start)
+        return rows
 
     @property
     def _end(self) -> int:
@@ -418,7 +467,10 @@ def shard_files(folder: Path, owner: str) -> list[Path]:
     """The ``shard_*.h5`` files of a sharded dataset folder, in name order (FileNotFoundError when none)."""
     shards = sorted(p for p in folder.glob(SHARD_PATTERN) if p.is_file())
     if not shards:
-        raise FileNotFoundError(f"{owner} requires an .h5 file or a folder of {SHARD_PATTERN} files, got {str(folder)!r}, a folder without shards")
+        raise FileNotFoundError(
+            f"{owner} requires an .h5 file or a folder of {SHARD_PATTERN} files, got {str(folder)!r}, "
+            "a folder without shards"
+        )
     return shards
 
 

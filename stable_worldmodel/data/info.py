@@ -63,7 +63,12 @@ def _dataset_dirs(root: Path) -> list[Path]:
         if not base.is_dir():
             continue
         for path in sorted(base.iterdir()):
-            if path.is_dir() and not _hidden(path, root) and path != root / DATASETS_SUBFOLDER and detect_format(path) is not None:
+            if (
+                path.is_dir()
+                and not _hidden(path, root)
+                and path != root / DATASETS_SUBFOLDER
+                and detect_format(path) is not None
+            ):
                 found.append(path)
     return found
 
@@ -72,8 +77,11 @@ def list_datasets() -> list[str]:
     """Names of the datasets in the cache: ``<name>.h5`` files and dataset folders of any registered format."""
     root = get_cache_dir()
     dirs = {p.relative_to(root).as_posix() for p in _dataset_dirs(root)}
-    names = {p.relative_to(root).with_suffix("").as_posix() for p in root.rglob("*.h5")
-             if p.is_file() and not _hidden(p, root) and not _is_shard(p, dirs, root)}
+    names = {
+        p.relative_to(root).with_suffix("").as_posix()
+        for p in root.rglob("*.h5")
+        if p.is_file() and not _hidden(p, root) and not _is_shard(p, dirs, root)
+    }
     return sorted(names | dirs)
 
 
@@ -81,7 +89,12 @@ def list_dataset_shards() -> list[str]:
     """Names of the shards of the sharded datasets in the cache (``<name>/shard_00000`` ...): each
     can be shown or read on its own; :func:`list_datasets` lists their folder."""
     root = get_cache_dir()
-    return sorted(p.relative_to(root).with_suffix("").as_posix() for d in _dataset_dirs(root) for p in d.glob("shard_*.h5") if p.is_file())
+    return sorted(
+        p.relative_to(root).with_suffix("").as_posix()
+        for d in _dataset_dirs(root)
+        for p in d.glob("shard_*.h5")
+        if p.is_file()
+    )
 
 
 def _is_shard(path: Path, dirs: set[str], root: Path) -> bool:
@@ -118,7 +131,12 @@ def _hidden(path: Path, root: Path) -> bool:
 
 def _candidates(root: Path, name: str) -> tuple[Path, ...]:
     """Where dataset ``name`` may be: ``<name>.h5`` or ``<name>/``, in the cache or its ``datasets/``."""
-    return (root / f"{name}.h5", root / name, root / DATASETS_SUBFOLDER / f"{name}.h5", root / DATASETS_SUBFOLDER / name)
+    return (
+        root / f"{name}.h5",
+        root / name,
+        root / DATASETS_SUBFOLDER / f"{name}.h5",
+        root / DATASETS_SUBFOLDER / name,
+    )
 
 
 def _dataset_path(name: str) -> Path:
@@ -126,7 +144,9 @@ def _dataset_path(name: str) -> Path:
     for path in _candidates(root, name):
         if path.exists():
             return path
-    raise ConfigError(f"dataset_info requires a dataset in {root}, got {name!r} (not found).{did_you_mean(name, list_datasets())}")
+    raise ConfigError(
+        f"dataset_info requires a dataset in {root}, got {name!r} (not found).{did_you_mean(name, list_datasets())}"
+    )
 
 
 def dataset_info(name: str) -> dict[str, Any]:
@@ -139,7 +159,9 @@ def dataset_info(name: str) -> dict[str, Any]:
     path = _dataset_path(name)
     fmt = detect_format(path)
     if fmt is None:
-        raise DatasetFormatError(f"dataset_info requires a dataset in a registered format ({', '.join(list_formats())}), got {str(path)!r}")
+        raise DatasetFormatError(
+            f"dataset_info requires a dataset in a registered format ({', '.join(list_formats())}), got {str(path)!r}"
+        )
     return {"name": name, **fmt.summary(path)}
 
 
@@ -231,7 +253,11 @@ def _world_info(name: str, image_shape: tuple[int, int], render_mode: str) -> Wo
             "observation_space": space_info(env.observation_space),
             "action_space": space_info(env.action_space),
             "variation": variation,
-            "config": {"image_shape": tuple(image_shape), "render_mode": render_mode, "max_episode_steps": env.spec.max_episode_steps if env.spec else None},
+            "config": {
+                "image_shape": tuple(image_shape),
+                "render_mode": render_mode,
+                "max_episode_steps": env.spec.max_episode_steps if env.spec else None,
+            },
         }
     finally:
         env.close()

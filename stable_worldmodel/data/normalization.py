@@ -77,7 +77,9 @@ class _Scaler:
 
     def _check_fitted(self) -> None:
         if any(v is None for v in self._stats()):
-            raise ConfigError(f"{type(self).__name__} requires fit(X) (or statistics given to the constructor) before transform")
+            raise ConfigError(
+                f"{type(self).__name__} requires fit(X) (or statistics given to the constructor) before transform"
+            )
 
     def fit_transform(self, X: Any) -> Any:
         return self.fit(X).transform(X)
@@ -148,7 +150,10 @@ _SCALERS: dict[str, type] = {"zscore": ZScoreScaler, "percentile": PercentileSca
 def get_scaler(method: str = "zscore", **kwargs: Any) -> Any:
     """An unfitted scaler: ``"zscore"``, ``"percentile"`` or ``"none"`` (``kwargs`` go to its constructor)."""
     if method not in _SCALERS:
-        raise ConfigError(f"get_scaler requires method to be one of {', '.join(map(repr, _SCALERS))}, got {method!r}.{did_you_mean(str(method), _SCALERS)}")
+        raise ConfigError(
+            f"get_scaler requires method to be one of {', '.join(map(repr, _SCALERS))}, "
+            f"got {method!r}.{did_you_mean(str(method), _SCALERS)}"
+        )
     return _SCALERS[method](**kwargs)
 
 
@@ -160,7 +165,9 @@ class ColumnTransform:
 
     def __call__(self, item: dict[str, Any]) -> dict[str, Any]:
         if self.source not in item:
-            raise UnknownNameError(f"column_normalizer column {self.source!r} not found in the item; it has {sorted(item)}")
+            raise UnknownNameError(
+                f"column_normalizer column {self.source!r} not found in the item; it has {sorted(item)}"
+            )
         out = dict(item)
         out[self.target] = self.scaler(item[self.source])
         return out

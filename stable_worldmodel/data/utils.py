@@ -8,7 +8,14 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["column_normalizer", "dataset_file", "get_cache_dir", "load_dataset", "resolve_dataset_dir", "resolve_dataset_path"]
+__all__ = [
+    "column_normalizer",
+    "dataset_file",
+    "get_cache_dir",
+    "load_dataset",
+    "resolve_dataset_dir",
+    "resolve_dataset_path",
+]
 
 ENV_VAR = "STABLEWM_HOME"
 DEFAULT_DIRNAME = ".stable_worldmodel"
@@ -24,7 +31,9 @@ def usable_dir(path: Path, what: str) -> Path:
     try:
         path.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise ConfigError(f"{what} requires a folder that can be created, got {str(path)!r}: {exc.strerror or exc}") from None
+        raise ConfigError(
+            f"{what} requires a folder that can be created, got {str(path)!r}: {exc.strerror or exc}"
+        ) from None
     if not os.access(path, os.W_OK | os.X_OK):
         raise ConfigError(f"{what} requires a writable folder, got {str(path)!r} (permission denied)")
     return path
@@ -48,7 +57,10 @@ def get_cache_dir(
 
     if override_root is not None:
         if cache_dir is not None:
-            raise ConfigError(f"get_cache_dir requires cache_dir or override_root (the same thing), got both: {cache_dir!r} and {override_root!r}")
+            raise ConfigError(
+                "get_cache_dir requires cache_dir or override_root (the same thing), "
+                f"got both: {cache_dir!r} and {override_root!r}"
+            )
         cache_dir = override_root
     if cache_dir is not None:
         root = usable_dir(Path(cache_dir).expanduser(), "get_cache_dir(cache_dir=...)")
@@ -60,7 +72,10 @@ def get_cache_dir(
         return root
     sub = Path(str(sub_folder))
     if not str(sub_folder).strip() or sub.is_absolute() or ".." in sub.parts:
-        raise ConfigError(f"get_cache_dir requires sub_folder to be a folder name inside the cache such as 'datasets', got {sub_folder!r}")
+        raise ConfigError(
+            "get_cache_dir requires sub_folder to be a folder name inside the cache such as 'datasets', "
+            f"got {sub_folder!r}"
+        )
     return usable_dir(root / sub, f"the cache sub-folder {str(sub_folder)!r}")
 
 
@@ -77,7 +92,9 @@ def _strip_seps(text: str) -> str:
     return text.rstrip("".join({"/", os.sep, os.altsep or "/"}))
 
 
-def resolve_dataset_path(name: str | os.PathLike, cache_dir: str | os.PathLike | None = None, suffix: str = ".h5") -> Path:
+def resolve_dataset_path(
+    name: str | os.PathLike, cache_dir: str | os.PathLike | None = None, suffix: str = ".h5"
+) -> Path:
     """Map a dataset name to ``<cache_dir or get_cache_dir()>/<name><suffix>``.
 
     A name ending in ``/`` is a :class:`~stable_worldmodel.errors.ConfigError` unless it names the
@@ -101,7 +118,8 @@ def resolve_dataset_path(name: str | os.PathLike, cache_dir: str | os.PathLike |
         from ..errors import ConfigError
 
         raise ConfigError(
-            f"A dataset name requires no trailing {str(name)[-1]!r} (unless it names a folder of shard_*{suffix} files), "
+            f"A dataset name requires no trailing {str(name)[-1]!r} "
+            f"(unless it names a folder of shard_*{suffix} files), "
             f"got {str(name)!r}; did you mean {_strip_seps(str(name))!r}?"
         )
     found = root / f"{name}{suffix}"
@@ -134,7 +152,9 @@ def dataset_file(name: Any, cache_dir: str | os.PathLike | None = None, suffix: 
     from ..errors import ConfigError
 
     def bad(why: str) -> ConfigError:
-        return ConfigError(f"record_dataset requires a dataset name such as 'pusht' or 'pusht/shard_0', got {name!r}: {why}")
+        return ConfigError(
+            f"record_dataset requires a dataset name such as 'pusht' or 'pusht/shard_0', got {name!r}: {why}"
+        )
 
     if not isinstance(name, (str, os.PathLike)):
         raise bad(f"a {type(name).__name__}, not a string")
@@ -167,14 +187,23 @@ def _find_dataset(name: str, cache_dir: str | os.PathLike | None) -> Path:
             return path
         raise FileNotFoundError(f"load_dataset requires an existing dataset, got {name!r}: the path does not exist")
     root = _root(cache_dir)
-    candidates = [root / name, root / f"{name}.h5", root / DATASETS_SUBFOLDER / name, root / DATASETS_SUBFOLDER / f"{name}.h5"]
+    candidates = [
+        root / name,
+        root / f"{name}.h5",
+        root / DATASETS_SUBFOLDER / name,
+        root / DATASETS_SUBFOLDER / f"{name}.h5",
+    ]
     for candidate in candidates:
         if candidate.exists():
             return candidate
     from .info import list_datasets
 
     known = list_datasets() if cache_dir is None else []
-    hub = " Downloading from the Hugging Face Hub is not supported: download it into that folder first." if "/" in name else ""
+    hub = (
+        " Downloading from the Hugging Face Hub is not supported: download it into that folder first."
+        if "/" in name
+        else ""
+    )
     raise FileNotFoundError(
         f"load_dataset requires an existing dataset, got {name!r}: it does not exist in {root} "
         f"(looked for {', '.join(str(c.relative_to(root)) for c in candidates)}).{did_you_mean(name, known)}{hub}"
@@ -208,7 +237,10 @@ def load_dataset(
     if not isinstance(text, str) or not text.strip():
         raise ConfigError(f"load_dataset requires a dataset name or path, got {name!r}")
     if "://" in text:
-        raise ConfigError(f"load_dataset requires a local dataset, got the URL {text!r}: no registered format ({', '.join(list_formats())}) reads URLs")
+        raise ConfigError(
+            f"load_dataset requires a local dataset, got the URL {text!r}: "
+            f"no registered format ({', '.join(list_formats())}) reads URLs"
+        )
     path = _find_dataset(text, cache_dir)
     if path.is_dir() and format is None and detect_format(path) is None:
         files = sorted(path.glob("*.h5")) + sorted(path.glob("*.hdf5"))

@@ -63,7 +63,9 @@ def write_mp4(path: str | os.PathLike, frames: Iterable[np.ndarray], fps: int = 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     writer = imageio.get_writer(
-        str(path), fps=fps, codec="libx264",
+        str(path),
+        fps=fps,
+        codec="libx264",
         quality=quality,
         pixelformat="yuv420p",
         macro_block_size=1,
@@ -106,7 +108,9 @@ def record_video_from_dataset(
     columns = list(dataset.column_names)
     missing = [v for v in views if v not in columns]
     if missing:
-        raise UnknownNameError(f"record_video_from_dataset view {missing[0]!r} not found in the dataset columns {columns}")
+        raise UnknownNameError(
+            f"record_video_from_dataset view {missing[0]!r} not found in the dataset columns {columns}"
+        )
     below = [keys.GOAL] if keys.GOAL in columns and keys.GOAL not in views else []
     out = []
     for ep in np.atleast_1d(episode_idx).tolist():
@@ -114,7 +118,8 @@ def record_video_from_dataset(
         frames = {k: np.asarray(steps[k])[: int(max_steps)] for k in views + below}
         n = min(len(v) for v in frames.values())
         rows = (
-            vstack_frames([hstack_frames([frames[v][i] for v in views]), *[frames[b][i] for b in below]]) for i in range(n)
+            vstack_frames([hstack_frames([frames[v][i] for v in views]), *[frames[b][i] for b in below]])
+            for i in range(n)
         )
         out.append(write_mp4(Path(video_path) / f"episode_{ep}.mp4", rows, fps=fps))
     return out

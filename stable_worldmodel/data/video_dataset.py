@@ -51,7 +51,14 @@ class VideoDataset(FolderDataset):
     media_kind = "video"
     meta_kind = "video"
 
-    def __init__(self, name: str | os.PathLike | None = None, video_keys: Sequence[str] | None = None, *, decoder: str | None = None, **kwargs: Any):
+    def __init__(
+        self,
+        name: str | os.PathLike | None = None,
+        video_keys: Sequence[str] | None = None,
+        *,
+        decoder: str | None = None,
+        **kwargs: Any,
+    ):
         if decoder is None:
             decoder = "decord" if not is_available("av") and is_available("decord") else "av"
         if decoder not in DECODERS:

@@ -5,11 +5,12 @@ Layout (N = total rows over all episodes, E = episodes)::
     <column>    (N, ...)        one flat dataset per info column, episodes concatenated
     pixels      (N, H, W, 3)    uint8 images (gzip, one row per chunk; see column_storage)
     action      (N, A)          row t holds the action taken at step t (NaN on an episode's last row)
+    checksum:<column>  (N,)     checksum of each row of each raw (uncompressed) column (see _rowsum)
     ep_len      (E,)  int32     rows of each episode
     ep_offset   (E,)  int64     first row of each episode
     attrs       next_seed       seed of the next episode to record (resuming continues from it)
 
-Commit record: rows are appended (resizable chunked datasets) and flushed *before*
+Commit record: rows (and their checksums) are appended (resizable chunked datasets) and flushed *before*
 ``ep_len`` / ``ep_offset`` grow; readers trust only those two columns and ignore rows past
 the last committed episode (a resuming writer writes over them). ``next_seed`` is stored
 before the ``ep_len`` entries it follows, so a kill between the two skips seeds but never
@@ -61,8 +62,8 @@ from typing import Any
 import numpy as np
 
 from .. import keys
-from ..errors import DatasetFormatError
-from . import _checksum, _superblock
+from ..errors import ConfigError, DatasetFormatError
+from . import _checksum, _rowsum, _superblock
 from ._index import H5_READ_ERRORS, damaged, not_a_file, read_index
 from ._lock import WriterLock
 
@@ -72,11 +73,6 @@ NEXT_SEED_ATTR = "next_seed"
 COMPRESS_ROW_BYTES = 1024  # rows this big are compressed (one per chunk); smaller ones are stored raw
 NUMERIC_CHUNK_BYTES = 16 * 1024
 GZIP_LEVEL = 4
-# Raw chunks with HDF5's Fletcher-32 checksum (compressed ones always have zlib's Adler-32). Off:
-# an append rewrites the partly filled raw chunk whole, and a kill -9 in the middle of that write
-# can leave it failing its checksum, so plain h5py (and HDF5Dataset) refuse its committed rows
-# until a writer resumes the file (see _checksum); bench/bench_checksum.py measures the cost.
-CHECKSUM_RAW = False
 INDEX_COLUMNS = (keys.EP_LEN, keys.EP_OFFSET)
 
 
@@ -104,8 +100,9 @@ def column_storage(row_shape: tuple[int, ...], dtype: np.dtype) -> dict[str, Any
     * smaller rows are stored uncompressed in chunks of about :data:`NUMERIC_CHUNK_BYTES`, with
       no fill value and no chunk cache (see :meth:`HDF5Writer._open`), so HDF5 writes exactly
       the bytes of the appended rows into the chunk and never touches the rows before them.
-      With :data:`CHECKSUM_RAW` they carry a Fletcher-32 checksum instead, and an append rewrites
-      the chunk whole, in place, its committed rows with the bytes they hold (see :mod:`._checksum`).
+      Hence no HDF5 filter on them (Fletcher-32 would make HDF5 rewrite the chunk whole, its
+      committed rows included, at every append): their checksums are rows of their own
+      (:mod:`._rowsum`), appended like any raw column's.
     """
     dtype = np.dtype(dtype)
     row_bytes = max(int(np.prod(row_shape, dtype=np.int64)) * dtype.itemsize, 1)
@@ -117,7 +114,7 @@ def column_storage(row_shape: tuple[int, ...], dtype: np.dtype) -> dict[str, Any
             shuffle=not is_image_column(row_shape, dtype) and dtype.itemsize > 1,
         )
     rows = 1 << ((NUMERIC_CHUNK_BYTES // row_bytes).bit_length() - 1)  # a power of two
-    return dict(chunks=(max(rows, 1), *row_shape), fillvalue=None, fill_time="never", fletcher32=CHECKSUM_RAW)
+    return dict(chunks=(max(rows, 1), *row_shape), fillvalue=None, fill_time="never")
 
 
 def _write_rows(dset, start: int, rows: np.ndarray) -> None:
@@ -131,6 +128,21 @@ def _write_rows(dset, start: int, rows: np.ndarray) -> None:
         dset.resize(end, axis=0)
     dset[start:end] = rows
     dset.flush()
+
+
+def _append_checksums(dset, start: int, sums: np.ndarray) -> None:
+    """:func:`_write_rows` for a 1-D checksum dataset, through h5py's low-level calls: the same
+    HDF5 calls (grow, write, flush) for a fraction of the Python cost of one per raw column per commit."""
+    import h5py
+
+    end = start + len(sums)
+    did = dset.id
+    if did.shape[0] < end:
+        did.set_extent((end,))
+    space = did.get_space()
+    space.select_hyperslab((start,), (len(sums),))
+    did.write(h5py.h5s.create_simple((len(sums),)), space, np.ascontiguousarray(sums))
+    did.flush()
 
 
 def _close(f, fileobj: _superblock.SealedFile) -> None:
@@ -148,13 +160,22 @@ class HDF5Writer:
 
     One writer per dataset: another writer of ``path`` (in any process) makes this one raise
     :class:`~stable_worldmodel.errors.DatasetBusyError` naming it, or wait for it with
-    ``wait=True`` (or ``wait=seconds``). Use as a context manager or call :meth:`close`. ``write_episodes`` takes a list of
+    ``wait=True`` (or ``wait=seconds``). Use as a context manager or call :meth:`close`.
+    ``write_episodes`` takes a list of
     episodes, each a mapping column -> array ``(L, ...)`` with the same columns, per-row
     shapes and dtypes as the episodes already in the file.
+
+    ``checksum`` (default True): a new file stores a checksum per row of each raw column, which
+    :class:`~.hdf5.HDF5Dataset` checks on read (see :mod:`._rowsum`). A file keeps what it was
+    created with: one without checksums is appended to without, one with them gets them for
+    every row appended, whatever ``checksum`` says.
     """
 
-    def __init__(self, path: str | os.PathLike, wait: bool | float = False):
+    def __init__(self, path: str | os.PathLike, wait: bool | float = False, *, checksum: bool = True):
         import h5py
+
+        if not isinstance(checksum, (bool, np.bool_)):
+            raise ConfigError(f"HDF5Writer requires checksum to be True or False, got {checksum!r}")
 
         self.path = Path(path)
         self._h5py = h5py
@@ -163,6 +184,9 @@ class HDF5Writer:
         self._closer: weakref.finalize | None = None
         self._closed = False
         self._schema: dict[str, tuple[tuple[int, ...], np.dtype]] = {}
+        self.checksum = bool(checksum)
+        self._summed: set[str] = set()  # columns whose rows get a checksum
+        self._sums: dict[str, Any] = {}  # their checksum datasets, opened once SWMR writing started
         self.num_rows = 0
         self.num_episodes = 0
         self.next_seed: int | None = None
@@ -202,8 +226,11 @@ class HDF5Writer:
             lengths, offsets, columns = read_index(f, self.path, "HDF5Writer")
             self._schema = {name: (tuple(f[name].shape[1:]), f[name].dtype) for name in columns}
             self.num_episodes = len(lengths)
-            self.num_rows = int(offsets[-1] + lengths[-1]) if len(lengths) else 0  # later rows (a killed commit): written over
+            self.num_rows = (
+                int(offsets[-1] + lengths[-1]) if len(lengths) else 0
+            )  # later rows (a killed commit): written over
             self._reseal(f, columns, self.num_rows)
+            self._summed = self._checksummed(f, columns)
         except (*H5_READ_ERRORS, DatasetFormatError) as exc:
             self.close()
             if isinstance(exc, DatasetFormatError):
@@ -217,11 +244,43 @@ class HDF5Writer:
         self._raise_io_error("resume")
 
     def _reseal(self, f, names: Sequence[str], end: int) -> None:
-        """Fresh checksums on the chunks of ``names`` past row ``end`` that a killed commit tore (see :mod:`._checksum`)."""
+        """Fresh checksums on the chunks of ``names`` past row ``end`` that a killed commit tore
+        (see :mod:`._checksum`)."""
         for name in names:
             fixed = _checksum.reseal(f[name], end)
             if fixed:
-                logger.warning("%s: re-sealed %d chunk(s) of column %r from row %d, torn by a killed commit", self.path, len(fixed), name, fixed[0])
+                logger.warning(
+                    "%s: re-sealed %d chunk(s) of column %r from row %d, torn by a killed commit",
+                    self.path,
+                    len(fixed),
+                    name,
+                    fixed[0],
+                )
+
+    def _checksummed(self, f, columns: Sequence[str]) -> set[str]:
+        """The columns of open file ``f`` whose checksums this writer keeps appending.
+
+        A checksum dataset shorter than the committed rows means another program appended rows
+        without checksums: rows past its end are read unchecked, and appending after a gap is
+        impossible, so that column gets no more.
+        """
+        summed = set()
+        for name in columns:
+            sums = f.get(_rowsum.companion(name))
+            if not _rowsum.is_checksum_dataset(sums, *self._schema[name]):
+                continue
+            if sums.shape[0] < self.num_rows:
+                logger.warning(
+                    "%s: rows %d:%d of column %r have no checksum (appended by another program); "
+                    "the rows appended now get none either",
+                    self.path,
+                    sums.shape[0],
+                    self.num_rows,
+                    name,
+                )
+                continue
+            summed.add(name)
+        return summed
 
     def _create(self, episode: Mapping[str, np.ndarray]) -> None:
         partial = self.path.with_name(f".{self.path.name}.partial")  # renamed once it is a valid file
@@ -233,6 +292,11 @@ class HDF5Writer:
                 storage = column_storage(row_shape, dtype)
                 f.create_dataset(name, shape=(0, *row_shape), maxshape=(None, *row_shape), dtype=dtype, **storage)
                 self._schema[name] = (row_shape, dtype)
+                if self.checksum and storage.get("compression") is None:  # compressed: zlib checks them
+                    sums = _rowsum.checksum_dtype(row_shape, dtype)
+                    storage = column_storage((), sums)
+                    f.create_dataset(_rowsum.companion(name), shape=(0,), maxshape=(None,), dtype=sums, **storage)
+                    self._summed.add(name)
             for name, dtype in ((keys.EP_LEN, np.int32), (keys.EP_OFFSET, np.int64)):
                 f.create_dataset(name, shape=(0,), maxshape=(None,), dtype=dtype, **column_storage((), dtype))
             f.attrs[NEXT_SEED_ATTR] = np.int64(-1)
@@ -240,7 +304,7 @@ class HDF5Writer:
             self._raise_io_error("create")
         except BaseException:
             self._release()
-            self._schema = {}
+            self._schema, self._summed = {}, set()
             partial.unlink(missing_ok=True)
             raise
         os.replace(partial, self.path)
@@ -323,10 +387,15 @@ class HDF5Writer:
         total = int(sum(lengths))
         start = self.num_rows
         f = self._file
-        for name in self._schema:
+        for name, (_, dtype) in self._schema.items():
             try:
                 data = np.concatenate([np.asarray(ep[name]) for ep in episodes])
                 _write_rows(f[name], start, data)
+                if name in self._summed:  # the checksums are of the rows as stored (HDF5 casts, saturating)
+                    stored = data if data.dtype == dtype else f[name][start : start + total]
+                    if name not in self._sums:
+                        self._sums[name] = f[_rowsum.companion(name)]
+                    _append_checksums(self._sums[name], start, _rowsum.row_checksums(stored, start))
             except (OSError, TypeError, ValueError) as exc:
                 self._raise_io_error(f"write column {name!r} to")
                 raise DatasetFormatError(
@@ -361,6 +430,7 @@ class HDF5Writer:
     def _release(self) -> None:
         io, closer = self._io, self._closer
         self._file = self._io = self._closer = None
+        self._sums = {}
         if closer is None:
             return
         try:
@@ -377,4 +447,3 @@ class HDF5Writer:
 
     def __exit__(self, *exc: Any) -> None:
         self.close()
-

@@ -27,13 +27,16 @@ def synthetic_episode(ep: int, length: int, image: tuple[int, int] = (8, 8)) -> 
 
 @pytest.fixture
 def make_h5(tmp_path):
-    """``make_h5(lengths, name)`` writes synthetic episodes with those lengths; returns the path."""
+    """``make_h5(lengths, name, image, **writer_options)`` writes synthetic episodes with those lengths;
+    returns the path."""
     from stable_worldmodel.data.writer import HDF5Writer
 
-    def make(lengths=(5, 7, 4), name="synth", image=(8, 8)):
+    def make(lengths=(5, 7, 4), name="synth", image=(8, 8), **writer_options):
         path = tmp_path / f"{name}.h5"
-        with HDF5Writer(path) as writer:
-            writer.write_episodes([synthetic_episode(e, n, image) for e, n in enumerate(lengths)], next_seed=len(lengths))
+        with HDF5Writer(path, **writer_options) as writer:
+            writer.write_episodes(
+                [synthetic_episode(e, n, image) for e, n in enumerate(lengths)], next_seed=len(lengths)
+            )
         return path
 
     return make

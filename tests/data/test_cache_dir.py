@@ -32,7 +32,9 @@ def test_resolve_dataset_path(tmp_path):
 
 
 def test_import_is_lazy():
-    code = "import sys, stable_worldmodel.data as d; d.get_cache_dir; print('h5py' in sys.modules, 'torch' in sys.modules)"
+    code = (
+        "import sys, stable_worldmodel.data as d; d.get_cache_dir; print('h5py' in sys.modules, 'torch' in sys.modules)"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
     assert out == ["False", "False"]
 

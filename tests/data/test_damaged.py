@@ -91,7 +91,11 @@ STRUCTURAL = {
     "ep_len scalar": (keys.EP_LEN, np.int32(5), "1-D integer dataset 'ep_len'"),
     "ep_len 2-D": (keys.EP_LEN, np.full((6, 2), 5, np.int32), "1-D integer dataset 'ep_len'"),
     "ep_len float": (keys.EP_LEN, np.full(6, 5.0), "1-D integer dataset 'ep_len'"),
-    "ep_len zero": (keys.EP_LEN, np.array([5, 5, 0, 5, 5, 5], np.int32), r"positive episode lengths, got ep_len\[2\] = 0"),
+    "ep_len zero": (
+        keys.EP_LEN,
+        np.array([5, 5, 0, 5, 5, 5], np.int32),
+        r"positive episode lengths, got ep_len\[2\] = 0",
+    ),
     "ep_len negative": (keys.EP_LEN, np.array([5, -5, 5, 5, 5, 5], np.int32), r"ep_len\[1\] = -5"),
     "ep_len too long": (keys.EP_LEN, np.array([5, 5, 5, 5, 5, 50], np.int32), "75 rows in every column"),
     "offset negative": (keys.EP_OFFSET, np.array([-1, 5, 10, 15, 20, 25]), "non-negative offsets"),

@@ -1,5 +1,6 @@
 """The last raw errors of the dataset files: truncated and cut-off files, a full disk while taking
-the writer lock, bit flips in raw chunks (Fletcher-32), and a dataset name ending in '/'."""
+the writer lock, bit flips in the raw chunks of files with Fletcher-32 (as an earlier version wrote
+them; row checksums, which replace it, are in test_row_checksums.py), and a dataset name ending in '/'."""
 
 from __future__ import annotations
 
@@ -52,7 +53,9 @@ def test_file_cut_inside_its_superblock(tmp_path, size):
     path.write_bytes(path.read_bytes()[:size])  # the 8-byte signature alone: was IndexError in needs_repair
     assert not _superblock.needs_repair(path)
     for open_it in (lambda: HDF5Dataset(path), lambda: load_dataset(str(path)), lambda: HDF5Writer(path)):
-        with pytest.raises(DatasetFormatError, match=rf"sig\.h5.*truncated \({size} bytes, cut off inside its superblock"):
+        with pytest.raises(
+            DatasetFormatError, match=rf"sig\.h5.*truncated \({size} bytes, cut off inside its superblock"
+        ):
             open_it()
 
 
@@ -96,10 +99,19 @@ def test_other_io_error_while_locking_stays_an_os_error_and_releases(tmp_path, m
         pass
 
 
-# -- checksums of raw chunks ------------------------------------------------------------------
+# -- Fletcher-32 on raw chunks (files of an earlier version) ------------------------------------
 @pytest.fixture
 def checksummed(monkeypatch):
-    monkeypatch.setattr(writer, "CHECKSUM_RAW", True)
+    """Write files as the earlier ``writer.CHECKSUM_RAW = True`` did: Fletcher-32 on every raw
+    chunk, no row checksums. Ours still read, append to and repair them."""
+    real = writer.column_storage
+
+    def storage(row_shape, dtype):
+        out = real(row_shape, dtype)
+        return out if out.get("compression") else {**out, "fletcher32": True}
+
+    monkeypatch.setattr(writer, "column_storage", storage)
+    monkeypatch.setattr(writer.HDF5Writer.__init__, "__kwdefaults__", {"checksum": False})
 
 
 def _flip(path, column: str, chunk: int = 0, at: int = 0) -> None:
@@ -110,16 +122,20 @@ def _flip(path, column: str, chunk: int = 0, at: int = 0) -> None:
     path.write_bytes(bytes(raw))
 
 
-def test_raw_columns_carry_a_checksum_that_catches_a_bit_flip(make_h5, checksummed):
+def test_fletcher32_raw_columns_catch_a_bit_flip(make_h5, checksummed):
     path = make_h5((5, 7, 4), name="flip")
     with h5py.File(path) as f:
         assert f[keys.STATE].fletcher32 and f[keys.STATE].compression is None
-        assert f[keys.EP_LEN].fletcher32
+        assert f[keys.EP_LEN].fletcher32 and not any(name.startswith("checksum:") for name in f)
         good = f[keys.STATE][:]
     _flip(path, keys.STATE, at=8 * 2 * 6 + 3)  # row 6 (episode 1), committed
     ds = HDF5Dataset(path, preload=False)
-    np.testing.assert_array_equal(ds.get_col_data(keys.ACTION)[:3], HDF5Dataset(path, keys_to_load=[keys.ACTION]).get_col_data(keys.ACTION)[:3])
-    with pytest.raises(DatasetFormatError, match=r"checksums hold, got a damaged chunk in rows .* of column 'state' of .*flip\.h5"):
+    np.testing.assert_array_equal(
+        ds.get_col_data(keys.ACTION)[:3], HDF5Dataset(path, keys_to_load=[keys.ACTION]).get_col_data(keys.ACTION)[:3]
+    )
+    with pytest.raises(
+        DatasetFormatError, match=r"checksums hold, got a damaged chunk in rows .* of column 'state' of .*flip\.h5"
+    ):
         ds.get_col_data(keys.STATE)
     with pytest.raises(DatasetFormatError, match="column 'state'"):
         HDF5Dataset(path)  # preloading reads it at construction
@@ -149,20 +165,6 @@ def test_checksummed_file_appends_resumes_and_reads_back(tmp_path, synth, checks
         assert f[keys.STATE].fletcher32 and f[keys.PIXELS].compression == "gzip"
 
 
-def test_files_without_checksums_still_read_and_append(tmp_path, synth, monkeypatch):
-    path = tmp_path / "old.h5"
-    with HDF5Writer(path) as w:
-        w.write_episodes([synth(0, 5)])
-    monkeypatch.setattr(writer, "CHECKSUM_RAW", True)
-    with HDF5Writer(path) as w:  # a file keeps the storage it was created with
-        w.write_episodes([synth(1, 4)])
-    with h5py.File(path) as f:
-        assert not f[keys.STATE].fletcher32
-    ds = HDF5Dataset(path)
-    assert ds.lengths.tolist() == [5, 4]
-    np.testing.assert_array_equal(ds.get_col_data(keys.STATE)[5:], synth(1, 4)[keys.STATE])
-
-
 def test_chunk_torn_by_a_killed_commit_is_resealed_when_resumed(tmp_path, synth, checksummed):
     """A kill in the middle of the pwrite that rewrites a raw chunk: its first page new, its checksum old."""
     path = tmp_path / "torn.h5"
@@ -183,7 +185,9 @@ def test_chunk_torn_by_a_killed_commit_is_resealed_when_resumed(tmp_path, synth,
         assert w.num_episodes == 1
         w.write_episodes([synth(1, 7)])
     ds = HDF5Dataset(path)
-    np.testing.assert_array_equal(ds.get_col_data(keys.STATE), np.concatenate([synth(0, 5)[keys.STATE], synth(1, 7)[keys.STATE]]))
+    np.testing.assert_array_equal(
+        ds.get_col_data(keys.STATE), np.concatenate([synth(0, 5)[keys.STATE], synth(1, 7)[keys.STATE]])
+    )
 
 
 def test_reader_reads_again_a_chunk_caught_mid_rewrite(make_h5, monkeypatch):

@@ -17,10 +17,18 @@ def path(make_h5):
 @pytest.mark.parametrize(
     ("kwargs", "error", "match"),
     [
-        (dict(keys_to_load="pixels"), ConfigError, r"keys_to_load to be a list of column names, got the string 'pixels'; write \['pixels'\]"),
+        (
+            dict(keys_to_load="pixels"),
+            ConfigError,
+            r"keys_to_load to be a list of column names, got the string 'pixels'; write \['pixels'\]",
+        ),
         (dict(keys_to_load=[]), ConfigError, "keys_to_load to be a non-empty list"),
         (dict(keys_to_load=["pixel"]), UnknownNameError, "'pixel'.*pixels"),
-        (dict(num_steps=8), ConfigError, r"num_steps \* frameskip <= the longest episode \(7 rows\), got num_steps=8 \* frameskip=1 = 8"),
+        (
+            dict(num_steps=8),
+            ConfigError,
+            r"num_steps \* frameskip <= the longest episode \(7 rows\), got num_steps=8 \* frameskip=1 = 8",
+        ),
         (dict(num_steps=3, frameskip=3), ConfigError, "= 9: no sample fits"),
         (dict(transform=5), ConfigError, "transform to be a callable"),
         (dict(num_steps=0), ConfigError, "num_steps to be a positive int"),

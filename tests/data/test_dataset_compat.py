@@ -75,8 +75,10 @@ class DatasetLike:
         return {c: torch.tensor([self.rows[row]]) for c in self.cols}
 
     def load_chunk(self, episodes_idx, start, end):
-        return [{c: torch.tensor(self.rows[self.offsets[e] + s : self.offsets[e] + t]) for c in self.cols}
-                for e, s, t in zip(episodes_idx, start, end)]
+        return [
+            {c: torch.tensor(self.rows[self.offsets[e] + s : self.offsets[e] + t]) for c in self.cols}
+            for e, s, t in zip(episodes_idx, start, end, strict=False)
+        ]
 
     def load_episode(self, ep):
         return self.load_chunk([ep], [0], [self.lengths[ep]])[0]
@@ -176,13 +178,19 @@ def test_goal_dataset_keeps_its_arguments_and_takes_any_dataset_like(make_h5):
     assert goal.episode_lengths.tolist() == list(LENGTHS) and goal.episode_offsets.tolist() == [0, 5, 12]
     item = goal[0]
     np.testing.assert_array_equal(item[keys.goal_key(keys.STATE)][0].numpy(), item[keys.STATE][-1].numpy())
-    like = GoalDataset(DatasetLike([3, 4]), goal_probabilities=[0, 1, 0], goal_keys={"obs": "goal_obs"}, gamma=0.5, seed=1)
+    like = GoalDataset(
+        DatasetLike([3, 4]), goal_probabilities=[0, 1, 0], goal_keys={"obs": "goal_obs"}, gamma=0.5, seed=1
+    )
     for idx in range(len(like)):
         ep, start = like.dataset.clip_indices[idx]
         goal_row = like[idx]["goal_obs"].item()
-        assert like.episode_offsets[ep] + start < goal_row < like.episode_offsets[ep] + like.episode_lengths[ep] or \
-            start == like.episode_lengths[ep] - 1
-    assert len(GoalDataset(MergeDataset([ds]), goal_probabilities=(1, 0, 0), seed=0)[3]) == len(ds.column_names) + 2  # goal_pixels, goal_state
+        assert (
+            like.episode_offsets[ep] + start < goal_row < like.episode_offsets[ep] + like.episode_lengths[ep]
+            or start == like.episode_lengths[ep] - 1
+        )
+    assert (
+        len(GoalDataset(MergeDataset([ds]), goal_probabilities=(1, 0, 0), seed=0)[3]) == len(ds.column_names) + 2
+    )  # goal_pixels, goal_state
 
 
 def test_record_video_needs_only_column_names_and_load_episode(tmp_path):
@@ -201,10 +209,15 @@ def test_record_video_needs_only_column_names_and_load_episode(tmp_path):
 
 
 def test_module_paths_of_003_and_011_import():
-    from stable_worldmodel.data.dataset import FolderDataset as F1, HDF5Dataset as H1, VideoDataset as V1  # 0.0.3
-    from stable_worldmodel.data.formats.folder import FolderDataset as F2, FolderWriter  # 0.1.1
-    from stable_worldmodel.data.formats.hdf5 import HDF5Dataset as H2, HDF5Writer  # noqa: F401
-    from stable_worldmodel.data.formats.video import VideoDataset as V2, VideoWriter  # noqa: F401
+    from stable_worldmodel.data.dataset import FolderDataset as F1  # 0.0.3
+    from stable_worldmodel.data.dataset import HDF5Dataset as H1
+    from stable_worldmodel.data.dataset import VideoDataset as V1
+    from stable_worldmodel.data.formats.folder import FolderDataset as F2  # 0.1.1
+    from stable_worldmodel.data.formats.folder import FolderWriter
+    from stable_worldmodel.data.formats.hdf5 import HDF5Dataset as H2  # noqa: F401
+    from stable_worldmodel.data.formats.hdf5 import HDF5Writer  # noqa: F401 (the import is what the test checks)
+    from stable_worldmodel.data.formats.video import VideoDataset as V2  # noqa: F401
+    from stable_worldmodel.data.formats.video import VideoWriter  # noqa: F401 (the import is what the test checks)
     from stable_worldmodel.data.normalization import get_scaler  # noqa: F401
     from stable_worldmodel.data.utils import column_normalizer, get_cache_dir, load_dataset  # noqa: F401
 

@@ -46,8 +46,16 @@ def test_folder_writer_writes_the_released_layout(tmp_path):
     with FolderWriter(tmp_path / "ds") as writer:
         writer.write_episodes([episode(0, 3), episode(1, 2)])
     root = tmp_path / "ds"
-    assert sorted(p.name for p in root.iterdir()) == ["action.npz", "ep_len.npz", "ep_offset.npz", "pixels", "state.npz"]
-    assert sorted(p.name for p in (root / "pixels").iterdir()) == [f"ep_{e}_step_{s}.jpeg" for e, n in ((0, 3), (1, 2)) for s in range(n)]
+    assert sorted(p.name for p in root.iterdir()) == [
+        "action.npz",
+        "ep_len.npz",
+        "ep_offset.npz",
+        "pixels",
+        "state.npz",
+    ]
+    assert sorted(p.name for p in (root / "pixels").iterdir()) == [
+        f"ep_{e}_step_{s}.jpeg" for e, n in ((0, 3), (1, 2)) for s in range(n)
+    ]
     assert np.load(root / "ep_len.npz")["arr_0"].tolist() == [3, 2]
     assert np.load(root / "ep_offset.npz")["arr_0"].tolist() == [0, 3]
     assert np.load(root / "state.npz")["arr_0"].shape == (5, 2)

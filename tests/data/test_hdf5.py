@@ -50,8 +50,13 @@ def test_action_shape_and_image_layout(make_h5):
 
 def test_keys_to_load_cache_and_transform(make_h5, synth):
     path = make_h5(LENGTHS)
-    ds = HDF5Dataset(path, num_steps=2, keys_to_load=[keys.STATE, keys.ACTION], keys_to_cache=[keys.STATE],
-                     transform=lambda item: {**item, "n": len(item)})
+    ds = HDF5Dataset(
+        path,
+        num_steps=2,
+        keys_to_load=[keys.STATE, keys.ACTION],
+        keys_to_cache=[keys.STATE],
+        transform=lambda item: {**item, "n": len(item)},
+    )
     item = ds[4]  # episode 1, start 0
     assert set(item) == {keys.STATE, keys.ACTION, "n"}
     np.testing.assert_array_equal(item[keys.STATE].numpy(), synth(1, 7)[keys.STATE][:2])
@@ -97,12 +102,17 @@ def test_dataloader_with_workers(make_h5):
 @pytest.mark.parametrize("preload", [True, False])
 @pytest.mark.parametrize("num_steps, frameskip", [(1, 1), (2, 2), (3, 1)])
 def test_getitems_is_the_list_of_items(make_h5, num_steps, frameskip, preload):
-    ds = HDF5Dataset(make_h5(LENGTHS), num_steps=num_steps, frameskip=frameskip, preload=preload,
-                     transform=lambda item: {**item, "twice": item[keys.STATE] * 2})
+    ds = HDF5Dataset(
+        make_h5(LENGTHS),
+        num_steps=num_steps,
+        frameskip=frameskip,
+        preload=preload,
+        transform=lambda item: {**item, "twice": item[keys.STATE] * 2},
+    )
     idx = [len(ds) - 1, 0, 3, -1, 2, 2]
     batch = ds.__getitems__(idx)
     assert len(batch) == len(idx)
-    for got, i in zip(batch, idx):
+    for got, i in zip(batch, idx, strict=False):
         want = ds[i]
         assert set(got) == set(want)
         for k in want:

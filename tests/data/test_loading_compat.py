@@ -25,7 +25,9 @@ def write_like_003(path, lengths=(4, 6)):
     with h5py.File(path, "w", libver="latest") as f:
         blosc = hdf5plugin.Blosc(cname="lz4", clevel=5, shuffle=hdf5plugin.Blosc.SHUFFLE)
         f.create_dataset(keys.PIXELS, data=pixels, chunks=(100, 8, 8, 3), maxshape=(None, 8, 8, 3), **blosc)
-        f.create_dataset(keys.ACTION, data=np.arange(2 * n, dtype=np.float32).reshape(n, 2), chunks=(1000, 2), maxshape=(None, 2))
+        f.create_dataset(
+            keys.ACTION, data=np.arange(2 * n, dtype=np.float32).reshape(n, 2), chunks=(1000, 2), maxshape=(None, 2)
+        )
         f.create_dataset(keys.EP_OFFSET, data=np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64))
         f.create_dataset(keys.EP_LEN, data=np.asarray(lengths, np.int32))
     return pixels
@@ -46,8 +48,9 @@ def test_blosc_compressed_003_files_open_with_no_extra_step(tmp_path):
 
 
 def test_hdf5plugin_is_a_dependency():
-    import tomllib
     from pathlib import Path
+
+    import tomllib
 
     pyproject = Path(__file__).resolve().parents[2] / "pyproject.toml"
     deps = tomllib.loads(pyproject.read_text())["project"]["dependencies"]
@@ -100,7 +103,9 @@ def test_column_normalizer(make_h5):
     assert item["state_norm"].dtype.is_floating_point and item["state_norm"].shape == item[keys.STATE].shape
     want = (item[keys.STATE].numpy() - state.mean(0)) / state.std(0)
     np.testing.assert_allclose(item["state_norm"].numpy(), want, rtol=1e-5)
-    ds_t = HDF5Dataset(ds.path, num_steps=2, transform=data.column_normalizer(ds, keys.STATE, keys.STATE, method="percentile"))
+    ds_t = HDF5Dataset(
+        ds.path, num_steps=2, transform=data.column_normalizer(ds, keys.STATE, keys.STATE, method="percentile")
+    )
     assert float(ds_t[0][keys.STATE].abs().max()) <= 1.0
     first = ds[0]
     assert data.column_normalizer(ds, keys.ACTION, "a", method="none")(first)["a"] is first[keys.ACTION]

@@ -33,7 +33,9 @@ def holder(tmp_path, synth):
 
     def start(seconds):
         ready = multiprocessing.get_context("fork").Event()
-        proc = multiprocessing.get_context("fork").Process(target=_hold, args=(tmp_path / "d.h5", ready, seconds, synth))
+        proc = multiprocessing.get_context("fork").Process(
+            target=_hold, args=(tmp_path / "d.h5", ready, seconds, synth)
+        )
         proc.start()
         assert ready.wait(10)
         procs.append(proc)

@@ -20,7 +20,6 @@ from stable_worldmodel.data import HDF5Dataset, _superblock
 from stable_worldmodel.data.writer import NEXT_SEED_ATTR, HDF5Writer
 from stable_worldmodel.errors import DatasetFormatError
 
-
 IMAGE = (24, 24)  # rows of 1.7 kB: compressed, one row per chunk (smaller rows are stored raw)
 
 
@@ -52,7 +51,7 @@ def _check_committed(f, synth) -> int:
     assert lengths.tolist() == [_length(e) for e in range(len(lengths))]
     end = int(offsets[-1] + lengths[-1]) if len(lengths) else 0
     columns = {name: f[name][:end] for name in f if name not in (keys.EP_LEN, keys.EP_OFFSET)}
-    for ep, (off, n) in enumerate(zip(offsets, lengths)):
+    for ep, (off, n) in enumerate(zip(offsets, lengths, strict=False)):
         for name, value in synth(ep, int(n), columns[keys.PIXELS].shape[1:3]).items():
             np.testing.assert_array_equal(columns[name][off : off + n], value, err_msg=f"{name} of episode {ep}")
     return len(lengths)

@@ -202,7 +202,7 @@ def test_an_evaluation_task_reads_checkpoints_from_the_drivers_cache(tmp_path, m
     """A worker of an existing cluster does not inherit the driver's STABLEWM_HOME: the task is given it."""
     import os
 
-    from stable_worldmodel.cli import worlds
+    from stable_worldmodel.planning import policies as worlds
     from stable_worldmodel.world.on_ray import _evaluate_chunk
 
     seen = []

@@ -6,12 +6,19 @@ import os
 from pathlib import Path
 from typing import Any
 
-from .._layout import EP_LEN_FILE
 from ..._lazy import lazy_getattr
+from .._layout import EP_LEN_FILE
 from ..format import Format, register_format
 
 # the reader and writer, as 0.1.1 placed them here (imported on first use)
-__getattr__ = lazy_getattr(__name__, {"FolderDataset": "stable_worldmodel.data.folder", "ImageDataset": "stable_worldmodel.data.folder", "FolderWriter": "stable_worldmodel.data.folder"})
+__getattr__ = lazy_getattr(
+    __name__,
+    {
+        "FolderDataset": "stable_worldmodel.data.folder",
+        "ImageDataset": "stable_worldmodel.data.folder",
+        "FolderWriter": "stable_worldmodel.data.folder",
+    },
+)
 
 
 @register_format

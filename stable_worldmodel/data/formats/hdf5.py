@@ -11,7 +11,9 @@ from ..._lazy import lazy_getattr
 from ..format import Format, register_format
 
 # the reader and writer, as 0.1.1 placed them here (imported on first use)
-__getattr__ = lazy_getattr(__name__, {"HDF5Dataset": "stable_worldmodel.data.hdf5", "HDF5Writer": "stable_worldmodel.data.writer"})
+__getattr__ = lazy_getattr(
+    __name__, {"HDF5Dataset": "stable_worldmodel.data.hdf5", "HDF5Writer": "stable_worldmodel.data.writer"}
+)
 
 SUFFIXES = (".h5", ".hdf5")
 

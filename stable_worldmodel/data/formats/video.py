@@ -6,12 +6,15 @@ import os
 from pathlib import Path
 from typing import Any
 
-from .._layout import EP_LEN_FILE, has_videos
 from ..._lazy import lazy_getattr
+from .._layout import EP_LEN_FILE, has_videos
 from ..format import Format, register_format
 
 # the reader and writer, as 0.1.1 placed them here (imported on first use)
-__getattr__ = lazy_getattr(__name__, {"VideoDataset": "stable_worldmodel.data.video_dataset", "VideoWriter": "stable_worldmodel.data.video_dataset"})
+__getattr__ = lazy_getattr(
+    __name__,
+    {"VideoDataset": "stable_worldmodel.data.video_dataset", "VideoWriter": "stable_worldmodel.data.video_dataset"},
+)
 
 
 @register_format
