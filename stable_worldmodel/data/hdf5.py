@@ -316,6 +316,12 @@ class HDF5Dataset(Dataset):
         """The open file of a plain (one-file) dataset; the first shard of a sharded one."""
         return self._handles()[0]
 
+    @property
+    def attrs(self) -> dict[str, Any]:
+        """The file's string attributes (``env_id``: the env it was recorded from, when the recorder
+        wrote it); of the first shard for a sharded dataset."""
+        return {k: str(v) for k, v in self._handle().attrs.items() if isinstance(v, (str, bytes))}
+
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         state["_file"] = None

@@ -9,6 +9,7 @@ Layout (N = total rows over all episodes, E = episodes)::
     ep_len      (E,)  int32     rows of each episode
     ep_offset   (E,)  int64     first row of each episode
     attrs       next_seed       seed of the next episode to record (resuming continues from it)
+                env_id          the env the episodes were recorded from (World.record_dataset)
 
 Commit record: rows (and their checksums) are appended (resizable chunked datasets) and flushed *before*
 ``ep_len`` / ``ep_offset`` grow; readers trust only those two columns and ignore rows past
@@ -70,6 +71,8 @@ from ._lock import WriterLock
 logger = logging.getLogger(__name__)
 
 NEXT_SEED_ATTR = "next_seed"
+#: file attribute naming the env a dataset was recorded from (``World.record_dataset`` writes it)
+ENV_ID_ATTR = "env_id"
 COMPRESS_ROW_BYTES = 1024  # rows this big are compressed (one per chunk); smaller ones are stored raw
 NUMERIC_CHUNK_BYTES = 16 * 1024
 GZIP_LEVEL = 4
@@ -171,11 +174,25 @@ class HDF5Writer:
     every row appended, whatever ``checksum`` says.
     """
 
-    def __init__(self, path: str | os.PathLike, wait: bool | float = False, *, checksum: bool = True):
+    def __init__(
+        self,
+        path: str | os.PathLike,
+        wait: bool | float = False,
+        *,
+        checksum: bool = True,
+        attrs: Mapping[str, str] | None = None,
+    ):
         import h5py
 
         if not isinstance(checksum, (bool, np.bool_)):
             raise ConfigError(f"HDF5Writer requires checksum to be True or False, got {checksum!r}")
+        attrs = dict(attrs or {})
+        bad = {k: v for k, v in attrs.items() if not (isinstance(k, str) and isinstance(v, str)) or k == NEXT_SEED_ATTR}
+        if bad:
+            raise ConfigError(
+                f"HDF5Writer requires attrs to map names to strings (not {NEXT_SEED_ATTR!r}), got {bad!r}"
+            )
+        self.attrs = attrs  # file attributes (e.g. the env id), written when missing
 
         self.path = Path(path)
         self._h5py = h5py
@@ -240,6 +257,9 @@ class HDF5Writer:
         self.next_seed = None if seed is None or int(seed) < 0 else int(seed)
         if NEXT_SEED_ATTR not in f.attrs:
             f.attrs[NEXT_SEED_ATTR] = np.int64(-1)
+        for key, value in self.attrs.items():
+            if key not in f.attrs:  # a file keeps what it was created with
+                f.attrs[key] = value
         self._start_swmr()
         self._raise_io_error("resume")
 
@@ -300,6 +320,8 @@ class HDF5Writer:
             for name, dtype in ((keys.EP_LEN, np.int32), (keys.EP_OFFSET, np.int64)):
                 f.create_dataset(name, shape=(0,), maxshape=(None,), dtype=dtype, **column_storage((), dtype))
             f.attrs[NEXT_SEED_ATTR] = np.int64(-1)
+            for key, value in self.attrs.items():
+                f.attrs[key] = value
             self._start_swmr()
             self._raise_io_error("create")
         except BaseException:

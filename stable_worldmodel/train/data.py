@@ -296,7 +296,11 @@ class TrainData:
 
     def protocol(self) -> dict[str, Any]:
         """What planning and evaluation need to know about the data the model saw."""
+        from ..data.writer import ENV_ID_ATTR
+
+        env = getattr(self.dataset, "attrs", {}).get(ENV_ID_ATTR)  # recorded by World.record_dataset
         return {
+            **({"env": env} if env else {}),
             "dataset": self.dataset.name,
             "dataset_path": str(self.dataset.path),
             "episodes": int(self.dataset.num_episodes),

@@ -93,14 +93,14 @@ def record_dataset(
     index in the file. Returns the file path.
     """
     from ..data.utils import dataset_file
-    from ..data.writer import HDF5Writer
+    from ..data.writer import ENV_ID_ATTR, HDF5Writer
     from .checks import check_seed
 
     if isinstance(episodes, bool) or not isinstance(episodes, (int, np.integer)) or episodes < 1:
         raise ConfigError(f"record_dataset requires episodes to be a positive int, got {episodes!r}")
     seed = check_seed("World.record_dataset", seed)
     path = dataset_file(dataset_name, cache_dir)
-    with HDF5Writer(path) as writer:
+    with HDF5Writer(path, attrs={ENV_ID_ATTR: world.env_name}) as writer:
         have = writer.num_episodes
         if have >= episodes:
             logger.info("%s already holds %d episodes (>= %d asked): nothing to record", path, have, episodes)

@@ -111,7 +111,8 @@ def checksummed(monkeypatch):
         return out if out.get("compression") else {**out, "fletcher32": True}
 
     monkeypatch.setattr(writer, "column_storage", storage)
-    monkeypatch.setattr(writer.HDF5Writer.__init__, "__kwdefaults__", {"checksum": False})
+    defaults = {**writer.HDF5Writer.__init__.__kwdefaults__, "checksum": False}
+    monkeypatch.setattr(writer.HDF5Writer.__init__, "__kwdefaults__", defaults)
 
 
 def _flip(path, column: str, chunk: int = 0, at: int = 0) -> None:
