@@ -59,7 +59,9 @@ def missing_column(owner: str, name: str, columns: Sequence[str]) -> UnknownName
 
 def image_like(arr: np.ndarray) -> bool:
     """Rows ``(N, H, W, C)`` uint8 with C in 1, 3, 4."""
-    return arr.dtype == np.uint8 and arr.ndim == 4 and arr.shape[-1] in (1, 3, 4)
+    from .writer import is_image_column
+
+    return arr.ndim == 4 and is_image_column(arr.shape[1:], arr.dtype)
 
 
 def _episode_array(name: str, value: Any, owner: str) -> np.ndarray:

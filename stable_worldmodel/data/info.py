@@ -50,7 +50,9 @@ class WorldInfo(TypedDict):
 
 def is_image(x: Any) -> bool:
     """True for a uint8 numpy array ``(H, W, C)`` with C in 1, 3, 4."""
-    return isinstance(x, np.ndarray) and x.dtype == np.uint8 and x.ndim == 3 and x.shape[-1] in (1, 3, 4)
+    from .writer import is_image_column
+
+    return isinstance(x, np.ndarray) and x.ndim == 3 and is_image_column(x.shape, x.dtype)
 
 
 # -- datasets ----------------------------------------------------------------------------------

@@ -79,9 +79,12 @@ GZIP_LEVEL = 4
 INDEX_COLUMNS = (keys.EP_LEN, keys.EP_OFFSET)
 
 
-def is_image_column(shape: tuple[int, ...], dtype: np.dtype) -> bool:
-    """Per-row ``shape`` (H, W, C) uint8 with C in 1, 3, 4."""
-    return np.dtype(dtype) == np.uint8 and len(shape) == 3 and shape[-1] in (1, 3, 4)
+def is_image_column(shape: tuple[int, ...], dtype: Any) -> bool:
+    """The one image rule of the package: per-row ``shape`` (H, W, C) of uint8 (a numpy or torch
+    dtype) with C in 1, 3, 4. :func:`.info.is_image`, :func:`.dataset.image_like` and
+    :func:`stable_worldmodel.planning.io.is_image` apply it to an array, rows and a batch."""
+    name = str(dtype).removeprefix("torch.") if type(dtype).__module__ == "torch" else np.dtype(dtype).name
+    return name == "uint8" and len(shape) == 3 and shape[-1] in (1, 3, 4)
 
 
 def is_recordable(value: Any) -> bool:

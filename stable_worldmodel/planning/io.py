@@ -35,7 +35,9 @@ def apply_process(fn: Callable[[np.ndarray], Any], array: np.ndarray) -> np.ndar
 
 def is_image(value: torch.Tensor) -> bool:
     """``(..., H, W, C)`` uint8 with C in 1, 3, 4: an image batch as the World stores it."""
-    return value.dtype == torch.uint8 and value.ndim >= 3 and value.shape[-1] in (1, 3, 4)
+    from ..data.writer import is_image_column
+
+    return value.ndim >= 3 and is_image_column(tuple(value.shape[-3:]), value.dtype)
 
 
 def _apply_transform(fn: Callable[[Any], Any], value: torch.Tensor) -> torch.Tensor:

@@ -115,3 +115,24 @@ def test_composites_require_a_dataset(cls_name):
 
     with pytest.raises(ConfigError, match=f"{cls_name} requires at least one dataset"):
         getattr(data, cls_name)([])
+
+
+def test_one_image_rule_for_arrays_rows_and_batches():
+    """``data.writer.is_image_column`` is the one rule; the array, rows and batch predicates apply it."""
+    import torch
+
+    from stable_worldmodel.data.dataset import image_like
+    from stable_worldmodel.data.info import is_image
+    from stable_worldmodel.data.writer import is_image_column
+    from stable_worldmodel.planning.io import is_image as is_image_batch
+
+    for channels in (1, 2, 3, 4, 5):
+        for dtype in (np.uint8, np.float32):
+            expected = channels in (1, 3, 4) and dtype is np.uint8
+            shape = (6, 5, channels)
+            assert is_image_column(shape, dtype) is expected
+            assert is_image_column(shape, np.dtype(dtype).name) is expected
+            assert is_image(np.zeros(shape, dtype)) is expected
+            assert image_like(np.zeros((2, *shape), dtype)) is expected
+            batch = torch.zeros((2, 1, *shape), dtype=torch.uint8 if dtype is np.uint8 else torch.float32)
+            assert is_image_batch(batch) is expected
