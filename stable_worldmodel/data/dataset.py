@@ -296,17 +296,29 @@ class Dataset(_TorchDataset):
         span, step = self.span, self._row_step(col)
         return np.stack([self._read_strided(col, int(s), int(s) + span, step) for s in starts])
 
-    def _batch(self, indices: Sequence[int]) -> dict[str, Any]:
-        """Columns of the samples ``indices`` as ``(B, T, ...)`` tensors (images ``(B, T, C, H, W)``)."""
+    def _batch(self, indices: Sequence[int], group_actions: bool = True) -> dict[str, Any]:
+        """Columns of the samples ``indices`` as ``(B, T, ...)`` tensors (images ``(B, T, C, H, W)``);
+        ``action`` as ``(B, T, frameskip * A)`` blocks, or its raw ``(B, T * frameskip, A)`` rows
+        when not ``group_actions``."""
         idx = np.asarray(indices)
         if idx.ndim != 1 or not idx.size or not np.issubdtype(idx.dtype, np.integer):
             raise ArgumentTypeError(f"{type(self).__name__} indices must be ints, got {indices!r}")
         eps, steps = self._locate_many(idx.astype(np.int64))
         starts = self._sample_index()[1][eps] + steps
         cols = {col: self._read_windows(col, starts) for col in self.keys_to_load}
-        if keys.ACTION in cols:  # (B, span, A) -> (B, T, frameskip * A)
+        if keys.ACTION in cols and group_actions:  # (B, span, A) -> (B, T, frameskip * A)
             cols[keys.ACTION] = cols[keys.ACTION].reshape(len(starts), self.num_steps, -1)
         return to_tensors(cols, batch=True, owned=True)  # gathered rows are fresh arrays
+
+    def _transformed(self, item: dict[str, Any]) -> dict[str, Any]:
+        """``transform`` applied as the original releases apply it: to the raw ``(T * frameskip, A)``
+        action rows (a ``column_normalizer`` fitted on the action column fits them), which are
+        grouped into ``(T, frameskip * A)`` blocks afterwards."""
+        if self.transform is not None:
+            item = self.transform(item)
+        if keys.ACTION in item:
+            item[keys.ACTION] = item[keys.ACTION].reshape(self.num_steps, -1)
+        return item
 
     def _load_slice(self, ep_idx: int, start: int, end: int) -> dict[str, Any]:
         """Steps ``start:end`` of episode ``ep_idx`` as 0.0.3 returned them: every loaded column
@@ -334,10 +346,7 @@ class Dataset(_TorchDataset):
         item = {}
         for col in self.keys_to_load:
             item[col] = self._read_strided(col, start, start + span, self._row_step(col))
-        if keys.ACTION in item:  # (span, A) -> (T, frameskip * A)
-            item[keys.ACTION] = item[keys.ACTION].reshape(self.num_steps, -1)
-        item = to_tensors(item)
-        return self.transform(item) if self.transform is not None else item
+        return self._transformed(to_tensors(item))  # action (span, A) -> transform -> (T, frameskip * A)
 
     def __getitems__(self, indices: Sequence[int]) -> list[dict[str, Any]]:
         """``[self[i] for i in indices]``, read column by column (what a DataLoader calls per batch).
@@ -349,13 +358,12 @@ class Dataset(_TorchDataset):
             return [self[i] for i in indices]
         if len(indices) == 0:
             return []
-        batch = self._batch(indices)
+        transform = self.transform is not None
+        batch = self._batch(indices, group_actions=not transform)  # a transform sees the raw action rows
         items = [
             dict(zip(batch, views, strict=False)) for views in zip(*(v.unbind(0) for v in batch.values()), strict=False)
         ]
-        if self.transform is not None:
-            items = [self.transform(item) for item in items]
-        return items
+        return [self._transformed(item) for item in items] if transform else items
 
     def load_episode(self, ep: int) -> dict[str, Any]:
         """Every loaded column of episode ``ep`` as tensors ``(L, ...)`` (images ``(L, C, H, W)``)."""
