@@ -89,6 +89,13 @@ class DiskFullError(SWMError, OSError):
     """A write that failed for lack of space (or a file-size limit); what was written before stays intact."""
 
 
+def is_disk_full(exc: BaseException) -> bool:
+    """``exc`` is an ``OSError`` of no space left, a full quota or a file-size limit (ENOSPC, EDQUOT, EFBIG)."""
+    import errno
+
+    return isinstance(exc, OSError) and exc.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG)
+
+
 def check_int(owner: str, key: str, value: object, minimum: int = 1) -> int:
     """``value`` as an ``int`` when it is an integer (numpy integers too; bools refused) ``>= minimum``,
     else a :class:`ConfigError` ``"<owner> requires <key> to be an integer >= <minimum>, got <value>"``.

@@ -11,7 +11,6 @@ removed by the holder on release, and a waiter that locked a file removed meanwh
 from __future__ import annotations
 
 import contextlib
-import errno
 import os
 import socket
 import sys
@@ -19,10 +18,9 @@ import threading
 import time
 from pathlib import Path
 
-from ..errors import ConfigError, DatasetBusyError, DiskFullError
+from ..errors import ConfigError, DatasetBusyError, DiskFullError, is_disk_full
 
 POLL_S = 0.05
-_FULL_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG}  # no space, quota, file-size limit
 _held: set[str] = set()  # lock files held by this process
 _held_guard = threading.Lock()
 
@@ -103,7 +101,7 @@ class WriterLock:
         except BaseException as exc:  # a lock that cannot name its holder is not kept (nor left held here)
             with contextlib.suppress(OSError):  # the failure to report is the one above
                 self.release()
-            if isinstance(exc, OSError) and exc.errno in _FULL_ERRNOS:
+            if is_disk_full(exc):
                 raise DiskFullError(
                     f"WriterLock requires room to write the lock file {self.path}, got {os.strerror(exc.errno)}; "
                     "free some space on that disk (or raise the quota) and try again"

@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from .. import keys
-from ..errors import ArgumentTypeError, ConfigError, UnknownNameError, did_you_mean
+from ..errors import ArgumentTypeError, ConfigError, UnknownNameError, check_int, did_you_mean
 from ._ipc import prepare_worker
 
 logger = logging.getLogger(__name__)
@@ -44,9 +44,7 @@ except ImportError:  # pragma: no cover - torch is a base dependency
 
 
 def _positive(name: str, value: Any, owner: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ConfigError(f"{owner} requires {name} to be a positive int, got {value!r}")
-    return int(value)
+    return check_int(owner, name, value)
 
 
 def missing_column(owner: str, name: str, columns: Sequence[str]) -> UnknownNameError:

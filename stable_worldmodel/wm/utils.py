@@ -18,7 +18,6 @@ imported (:mod:`stable_worldmodel.wm.trust`), and weights are read with ``weight
 
 from __future__ import annotations
 
-import errno
 import functools
 import hashlib
 import io
@@ -29,7 +28,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from ..errors import CheckpointError, ConfigError, DiskFullError
+from ..errors import CheckpointError, ConfigError, DiskFullError, is_disk_full
 
 logger = logging.getLogger(__name__)
 
@@ -116,7 +115,6 @@ def instantiate(config: Any, *, trusted_targets: Any = None, source: str | os.Pa
 
 
 # -- save -------------------------------------------------------------------------------------
-_FULL_ERRNOS = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG}
 
 
 def _fsync_dir(folder: Path) -> None:
@@ -141,7 +139,7 @@ def _atomic_write(path: Path, write: Any) -> None:
         os.replace(tmp, path)
         _fsync_dir(path.parent)
     except OSError as exc:
-        if exc.errno in _FULL_ERRNOS:
+        if is_disk_full(exc):
             raise DiskFullError(
                 f"Could not write {path}: {os.strerror(exc.errno)}; the file it would replace is intact. "
                 "Free some space and try again (swm train: --resume continues from the last checkpoint)."

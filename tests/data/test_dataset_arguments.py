@@ -31,8 +31,8 @@ def path(make_h5):
         ),
         (dict(num_steps=3, frameskip=3), ConfigError, "= 9: no sample fits"),
         (dict(transform=5), ConfigError, "transform to be a callable"),
-        (dict(num_steps=0), ConfigError, "num_steps to be a positive int"),
-        (dict(frameskip=1.5), ConfigError, "frameskip to be a positive int"),
+        (dict(num_steps=0), ConfigError, "num_steps to be an integer >= 1"),
+        (dict(frameskip=1.5), ConfigError, "frameskip to be an integer >= 1"),
     ],
 )
 def test_constructor_arguments(path, kwargs, error, match):
