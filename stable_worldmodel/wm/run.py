@@ -250,7 +250,7 @@ class Run:
         key = (str(weights), _stamp(weights), _stamp(protocol_path))
         if key not in _OPENED:
             data = _read_json(protocol_path, "the protocol file") if protocol_path.is_file() else {}
-            if len(_OPENED) > 64:  # a long-lived process opening many runs: forget the oldest
+            if len(_OPENED) >= 8:  # a long-lived process opening many runs: forget the oldest (and its model)
                 _OPENED.pop(next(iter(_OPENED)))
             _OPENED[key] = (RunProtocol.from_dict(data, str(protocol_path)), {})
         protocol, models = _OPENED[key]

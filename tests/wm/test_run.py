@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import os
 import time
+from pathlib import Path
 
 import pytest
 import torch
@@ -123,3 +124,19 @@ def test_an_upstream_checkpoint_without_protocol_gets_upstreams_defaults(saved):
 def test_a_missing_run_names_where_it_looked(_stablewm_home, saved):
     with pytest.raises(FileNotFoundError, match="Did you mean 'r'"):
         Run.open("wm:rr")
+
+
+def test_a_long_lived_process_keeps_at_most_8_runs_open(_stablewm_home):
+    """Opened runs (and the models built from them) are kept for reuse, the 8 most recent only."""
+    model = torch.nn.Linear(2, 2)
+    for i in range(9):
+        wmu.write_checkpoint(
+            model,
+            _stablewm_home / "checkpoints" / f"r{i}",
+            {"_target_": "torch.nn.Linear", "in_features": 2, "out_features": 2},
+        )
+    run_module._OPENED.clear()
+    for i in range(9):
+        Run.open(f"r{i}").load_model()
+    kept = {Path(key[0]).parent.name for key in run_module._OPENED}
+    assert len(run_module._OPENED) == 8 and "r0" not in kept and "r8" in kept
