@@ -100,15 +100,11 @@ def run_facts(run: str, cache_dir: str | None = None) -> tuple[RunFacts, dict[st
 
 def partial_run(protocol: dict[str, Any]) -> tuple[int, int] | None:
     """``(steps_done, steps)`` of a run stopped before its last step (its ``final`` absent or null,
-    ``steps_done < steps``), else None."""
-    if protocol.get("final") is not None:
-        return None
-    done, steps = protocol.get("steps_done"), protocol.get("steps")
-    try:
-        done, steps = int(done), int(steps)
-    except (TypeError, ValueError):
-        return None
-    return (done, steps) if done < steps else None
+    ``steps_done < steps``: :attr:`~stable_worldmodel.wm.run.RunProtocol.partial`), else None."""
+    from ..wm.run import RunProtocol
+
+    typed = RunProtocol.from_dict(protocol)
+    return (typed.steps_done, typed.steps) if typed.partial else None
 
 
 def check_run_fits(
