@@ -200,14 +200,6 @@ class RunProtocol:
         shape = self.dataset_image_shape
         return (int(shape[0]), int(shape[1])) if shape and len(shape) >= 2 else (self.image_size, self.image_size)
 
-    def progress_note(self) -> str | None:
-        """``"the checkpoint of step N of M (partial run)"`` for a partial run, else None."""
-        if not self.partial:
-            return None
-        return (
-            f"the checkpoint of step {self.steps_done} of {self.steps} (partial run: it stopped before its last step)"
-        )
-
 
 #: (weights path, its stamp, the protocol's stamp) -> (protocol, shared model cache) of the runs opened
 _OPENED: dict[tuple, tuple[RunProtocol, dict]] = {}
