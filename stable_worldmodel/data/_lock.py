@@ -16,6 +16,7 @@ import socket
 import sys
 import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from ..errors import ConfigError, DatasetBusyError, DiskFullError, is_disk_full
@@ -48,10 +49,13 @@ class WriterLock:
     """Exclusive lock on dataset ``path`` (``with`` or :meth:`acquire` / :meth:`release`).
 
     ``wait``: False raises :class:`DatasetBusyError` at once when another writer holds the
-    dataset; True waits for it; a number waits at most that many seconds.
+    dataset; True waits for it; a number waits at most that many seconds. ``busy`` builds the
+    error instead, from the holder's description (a run folder's lock raises ``RunBusyError``).
     """
 
-    def __init__(self, path: str | os.PathLike, wait: bool | float = False):
+    def __init__(
+        self, path: str | os.PathLike, wait: bool | float = False, *, busy: Callable[[str], Exception] | None = None
+    ):
         if isinstance(wait, bool):
             timeout = float("inf") if wait else 0.0
         elif isinstance(wait, (int, float)) and wait >= 0:
@@ -61,6 +65,7 @@ class WriterLock:
         self.dataset = Path(path)
         self.path = lock_path(path)
         self.timeout = timeout
+        self.busy = busy
         self._fd: int | None = None
         self._pid: int | None = None
 
@@ -88,6 +93,8 @@ class WriterLock:
                         continue
             if time.monotonic() >= deadline:
                 holder = "this process" if mine else holder
+                if self.busy is not None:
+                    raise self.busy(holder)
                 how = "pass wait=True to wait for it" if self.timeout == 0 else f"waited {self.timeout:g} s"
                 raise DatasetBusyError(
                     f"{self.dataset} requires a single writer, got one already writing it: {holder}; "

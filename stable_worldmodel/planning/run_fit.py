@@ -21,8 +21,6 @@ from ..errors import RunMismatchError
 
 __all__ = ["RunFacts", "check_run_fits", "partial_note", "partial_run", "run_facts"]
 
-#: protocol keys that may name the env a run's dataset was recorded from
-ENV_KEYS = ("env", "env_id")
 #: what a dataset folder recorded on Ray keeps its env id in (``world.on_ray``)
 MANIFEST = "manifest.json"
 
@@ -44,23 +42,22 @@ class RunFacts:
     frameskip: int | None = None
 
     @classmethod
-    def from_protocol(cls, run: str, protocol: dict[str, Any]) -> RunFacts:
-        shape = protocol.get("dataset_image_shape")
-        size = protocol.get("image_size")
-        if shape and len(shape) >= 2:
-            frame = (int(shape[0]), int(shape[1]))
-        elif size:  # a protocol without its dataset's frame shape: the model's input size
-            frame = (int(size), int(size))
-        else:
-            frame = None
+    def from_protocol(cls, run: str, protocol: Any) -> RunFacts:
+        """The facts of ``protocol`` (a :class:`~stable_worldmodel.wm.run.RunProtocol` or its mapping):
+        only what it records, so an upstream checkpoint's defaults are not taken for facts."""
+        from ..wm.run import RunProtocol
+
+        typed = protocol if isinstance(protocol, RunProtocol) else RunProtocol.from_dict(protocol)
+        raw = typed.raw
+        recorded_size = "dataset_image_shape" in raw or "image_size" in raw
         return cls(
             run=run,
-            env=_recorded_env(protocol),
-            dataset=protocol.get("dataset"),
-            frame_size=frame,
-            model_size=int(size) if size else None,
-            action_dim=int(protocol["action_dim"]) if protocol.get("action_dim") else None,
-            frameskip=int(protocol["frameskip"]) if protocol.get("frameskip") else None,
+            env=typed.env or _manifest_env(typed.dataset_path),
+            dataset=typed.dataset,
+            frame_size=typed.frame_size if recorded_size else None,
+            model_size=typed.image_size if "image_size" in raw else None,
+            action_dim=typed.action_dim,
+            frameskip=typed.frameskip if "frameskip" in raw else None,
         )
 
     def trained_on(self) -> str:
@@ -73,12 +70,8 @@ class RunFacts:
         return " ".join(parts) or "its training data"
 
 
-def _recorded_env(protocol: dict[str, Any]) -> str | None:
-    """The env id of the run's dataset: in the protocol, else in the manifest of a dataset recorded on Ray."""
-    for key in ENV_KEYS:
-        if protocol.get(key):
-            return str(protocol[key])
-    path = protocol.get("dataset_path")
+def _manifest_env(path: str | None) -> str | None:
+    """The env id in the manifest of a dataset folder recorded on Ray (None: none there)."""
     if path:
         manifest = Path(path) / MANIFEST
         try:
@@ -94,8 +87,8 @@ def run_facts(run: str, cache_dir: str | None = None) -> tuple[RunFacts, dict[st
     """``(facts, protocol)`` of checkpoint ``run`` (an upstream checkpoint without a protocol: nothing recorded)."""
     from ..wm.run import Run
 
-    protocol = Run.open(run, cache_dir).protocol.to_dict()
-    return RunFacts.from_protocol(run, protocol), protocol
+    protocol = Run.open(run, cache_dir).protocol
+    return RunFacts.from_protocol(run, protocol), protocol.to_dict()
 
 
 def partial_run(protocol: dict[str, Any]) -> tuple[int, int] | None:

@@ -289,18 +289,13 @@ def lock_run(folder: Path, run: str) -> Any:
     """Hold the one-writer lock of run folder ``folder`` (``checkpoints/.<run>.lock``; see
     :mod:`stable_worldmodel.data._lock`: it dies with its holder) or raise
     :class:`~stable_worldmodel.errors.RunBusyError` naming the holder. Release it with ``.release()``."""
-    from ..data._lock import WriterLock, lock_path
-    from ..errors import DatasetBusyError
+    from ..data._lock import WriterLock
 
-    folder.parent.mkdir(parents=True, exist_ok=True)
-    try:
-        return WriterLock(folder).acquire()
-    except DatasetBusyError as exc:
-        try:
-            holder = lock_path(folder).read_text().strip() or "another process"
-        except OSError:
-            holder = "another process"
-        raise RunBusyError(
+    def busy(holder: str) -> RunBusyError:
+        return RunBusyError(
             f"Run {run!r} requires a single trainer, got one already training it: {holder}; "
             f"let it finish (or stop it), or train under another --name"
-        ) from exc
+        )
+
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    return WriterLock(folder, busy=busy).acquire()
