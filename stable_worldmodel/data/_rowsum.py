@@ -91,12 +91,17 @@ def multipliers(words: int) -> np.ndarray:
     return np.array(out, dtype=np.uint64)
 
 
-def checksum_dtype(row_shape: tuple[int, ...], dtype: np.dtype) -> np.dtype:
-    """The dtype of the checksums of rows of ``row_shape`` and ``dtype``: signed (torch, which
-    0.1.1's reader hands them to, has no uint64), 1, 2, 4 or 8 bytes (see the module docstring)."""
+@functools.lru_cache(maxsize=256)
+def _checksum_dtype(row_shape: tuple[int, ...], dtype: np.dtype) -> np.dtype:
     row_bytes = int(np.prod(row_shape, dtype=np.int64)) * np.dtype(dtype).itemsize
     size = next(s for s in (1, 2, 4, 8) if s >= min(row_bytes, 8))
     return np.dtype(_STORED[size][1])
+
+
+def checksum_dtype(row_shape: tuple[int, ...], dtype: np.dtype) -> np.dtype:
+    """The dtype of the checksums of rows of ``row_shape`` and ``dtype``: signed (torch, which
+    0.1.1's reader hands them to, has no uint64), 1, 2, 4 or 8 bytes (see the module docstring)."""
+    return _checksum_dtype(tuple(row_shape), np.dtype(dtype))
 
 
 def row_checksums(rows: np.ndarray, start: int) -> np.ndarray:

@@ -124,31 +124,24 @@ def column_storage(row_shape: tuple[int, ...], dtype: np.dtype) -> dict[str, Any
 
 
 def _write_rows(dset, start: int, rows: np.ndarray) -> None:
-    """Write ``rows`` at ``start`` (growing ``dset`` if needed) and flush them.
+    """Write ``rows`` (already of ``dset``'s dtype, or castable by HDF5) at ``start``, growing
+    ``dset`` if needed, through h5py's low-level calls (a fraction of the Python cost of
+    ``dset[start:end] = rows``, paid per column per commit). The caller flushes.
 
     A dataset is never shrunk: HDF5 would rewrite the chunk that holds its last committed rows.
     Rows past ``start`` left by a killed commit are written over instead (readers ignore them).
     """
-    end = start + len(rows)
-    if dset.shape[0] < end:
-        dset.resize(end, axis=0)
-    dset[start:end] = rows
-    dset.flush()
-
-
-def _append_checksums(dset, start: int, sums: np.ndarray) -> None:
-    """:func:`_write_rows` for a 1-D checksum dataset, through h5py's low-level calls: the same
-    HDF5 calls (grow, write, flush) for a fraction of the Python cost of one per raw column per commit."""
     import h5py
 
-    end = start + len(sums)
+    rows = np.ascontiguousarray(rows)
+    end = start + len(rows)
     did = dset.id
-    if did.shape[0] < end:
-        did.set_extent((end,))
+    shape = did.shape
+    if shape[0] < end:
+        did.set_extent((end, *shape[1:]))
     space = did.get_space()
-    space.select_hyperslab((start,), (len(sums),))
-    did.write(h5py.h5s.create_simple((len(sums),)), space, np.ascontiguousarray(sums))
-    did.flush()
+    space.select_hyperslab((start,) + (0,) * (len(shape) - 1), (len(rows), *shape[1:]))
+    did.write(h5py.h5s.create_simple(rows.shape), space, rows)
 
 
 def _close(f, fileobj: _superblock.SealedFile) -> None:
@@ -206,7 +199,7 @@ class HDF5Writer:
         self._schema: dict[str, tuple[tuple[int, ...], np.dtype]] = {}
         self.checksum = bool(checksum)
         self._summed: set[str] = set()  # columns whose rows get a checksum
-        self._sums: dict[str, Any] = {}  # their checksum datasets, opened once SWMR writing started
+        self._dsets: dict[str, Any] = {}  # the file's datasets by name, opened once SWMR writing started
         self.num_rows = 0
         self.num_episodes = 0
         self.next_seed: int | None = None
@@ -399,7 +392,8 @@ class HDF5Writer:
         return length
 
     def write_episodes(self, episodes: Sequence[Mapping[str, np.ndarray]], next_seed: int | None = None) -> None:
-        """Append ``episodes`` and commit them (one flush); ``next_seed`` is stored for resuming."""
+        """Append ``episodes`` and commit them (rows, then ``ep_offset``, then ``ep_len``, each
+        flushed); ``next_seed`` is stored for resuming."""
         if self._closed:
             raise DatasetFormatError(
                 f"HDF5Writer requires an open writer, got a closed one for {self.path}; open a new HDF5Writer to append"
@@ -412,15 +406,17 @@ class HDF5Writer:
         total = int(sum(lengths))
         start = self.num_rows
         f = self._file
+        dsets = self._dsets
+        if not dsets:  # opened once, after SWMR writing started
+            dsets.update((name, f[name]) for name in [*self._schema, keys.EP_LEN, keys.EP_OFFSET])
+            dsets.update((_rowsum.companion(name), f[_rowsum.companion(name)]) for name in self._summed)
         for name, (_, dtype) in self._schema.items():
             try:
                 data = np.concatenate([np.asarray(ep[name]) for ep in episodes])
-                _write_rows(f[name], start, data)
+                _write_rows(dsets[name], start, data)
                 if name in self._summed:  # the checksums are of the rows as stored (HDF5 casts, saturating)
-                    stored = data if data.dtype == dtype else f[name][start : start + total]
-                    if name not in self._sums:
-                        self._sums[name] = f[_rowsum.companion(name)]
-                    _append_checksums(self._sums[name], start, _rowsum.row_checksums(stored, start))
+                    stored = data if data.dtype == dtype else dsets[name][start : start + total]
+                    _write_rows(dsets[_rowsum.companion(name)], start, _rowsum.row_checksums(stored, start))
             except (OSError, TypeError, ValueError) as exc:
                 self._raise_io_error(f"write column {name!r} to")
                 raise DatasetFormatError(
@@ -432,10 +428,12 @@ class HDF5Writer:
         try:
             if next_seed is not None:  # on disk before the commit: a kill after it skips seeds, never repeats
                 f.attrs.modify(NEXT_SEED_ATTR, np.int64(next_seed))
-                f.flush()
+            f.flush()  # the rows, their checksums and next_seed, before ep_len grows
+            if next_seed is not None:
                 self.next_seed = int(next_seed)
-            for name, values in ((keys.EP_OFFSET, offsets), (keys.EP_LEN, lengths)):  # ep_len last: the commit
-                _write_rows(f[name], self.num_episodes, np.asarray(values))
+            _write_rows(dsets[keys.EP_OFFSET], self.num_episodes, offsets)
+            dsets[keys.EP_OFFSET].flush()  # before ep_len, whose new entries are the commit
+            _write_rows(dsets[keys.EP_LEN], self.num_episodes, np.asarray(lengths))
             f.flush()
         except OSError as exc:
             self._raise_io_error("commit episodes to")
@@ -455,7 +453,7 @@ class HDF5Writer:
     def _release(self) -> None:
         io, closer = self._io, self._closer
         self._file = self._io = self._closer = None
-        self._sums = {}
+        self._dsets = {}
         if closer is None:
             return
         try:

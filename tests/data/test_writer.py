@@ -17,6 +17,7 @@ import pytest
 
 from stable_worldmodel import keys
 from stable_worldmodel.data import HDF5Dataset, _superblock
+from stable_worldmodel.data import writer as writer_module
 from stable_worldmodel.data.writer import NEXT_SEED_ATTR, HDF5Writer
 from stable_worldmodel.errors import DatasetFormatError
 
@@ -230,14 +231,14 @@ def test_bad_column_fails_naming_it(make_h5, change, column, synth):
 
 def test_disk_full_fails_loudly_and_keeps_committed(make_h5, monkeypatch, synth):
     path = make_h5((3,))
-    real = h5py.Dataset.__setitem__
+    real = writer_module._write_rows
 
-    def full(self, key, value):
-        if self.name == "/" + keys.PIXELS:
+    def full(dset, start, rows):
+        if dset.name == "/" + keys.PIXELS:
             raise OSError(28, "No space left on device")
-        return real(self, key, value)
+        return real(dset, start, rows)
 
-    monkeypatch.setattr(h5py.Dataset, "__setitem__", full)
+    monkeypatch.setattr(writer_module, "_write_rows", full)
     with HDF5Writer(path) as w, pytest.raises(DatasetFormatError, match="pixels"):
         w.write_episodes([synth(1, 4)])
     monkeypatch.undo()
