@@ -57,8 +57,5 @@ if TYPE_CHECKING:  # pragma: no cover
     from .world import World  # noqa: F401
 
 from .envs import _registry  # noqa: E402  (registers swm/... ids; imports gymnasium only)
-from .envs.mujoco_render import default_gl_backend as _default_gl_backend  # noqa: E402
-
-_default_gl_backend()  # headless: MuJoCo renders through EGL even when imported after us
 
 _registry.register_all()

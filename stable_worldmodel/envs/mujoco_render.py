@@ -1,8 +1,11 @@
 """Headless MuJoCo rendering shared by the MuJoCo env families (OGBench, DeepMind Control).
 
-Import this module (or call :func:`setup_gl`) **before** ``mujoco``: MuJoCo picks its GL
+Our MuJoCo env modules call :func:`setup_gl` before they import ``mujoco``: MuJoCo picks its GL
 backend from ``MUJOCO_GL`` when it is first imported. On Linux without a display we choose EGL
-(``MUJOCO_GL=egl``, ``PYOPENGL_PLATFORM=egl``); a value the user set is kept.
+(``MUJOCO_GL=egl``, ``PYOPENGL_PLATFORM=egl``); a value the user set is kept. ``import
+stable_worldmodel`` sets nothing: the choice is made when a MuJoCo env is first made, and if the
+user imported ``mujoco`` before that (it then picked GLFW, which cannot render headless), its
+renderer is pointed at EGL instead.
 
 Traps this module handles (measured here, EGL on a CPU):
 
@@ -43,13 +46,30 @@ def default_gl_backend() -> str | None:
     """``MUJOCO_GL`` after choosing EGL where MuJoCo could not render otherwise (no mujoco import).
 
     On Linux without ``DISPLAY`` / ``WAYLAND_DISPLAY``, an unset ``MUJOCO_GL`` becomes ``"egl"``
-    while ``mujoco`` is not imported yet. ``import stable_worldmodel`` calls it, so importing
-    ``mujoco`` (or dm_control) after our package renders headless too.
+    while ``mujoco`` is not imported yet.
     """
     backend = os.environ.get("MUJOCO_GL")
     if backend is None and _headless_linux() and "mujoco" not in sys.modules:
         backend = os.environ["MUJOCO_GL"] = "egl"
     return backend
+
+
+def _adopt_egl() -> bool:
+    """Point an already imported ``mujoco`` (which picked GLFW, headless) at EGL: the GL context
+    its ``Renderer`` makes, and ``mujoco.GLContext``. False where EGL cannot load (PyOpenGL set up
+    for another platform, no libEGL)."""
+    import importlib
+
+    import mujoco
+
+    try:
+        egl = importlib.import_module("mujoco.egl")
+    except (ImportError, OSError, AttributeError):
+        return False
+    sys.modules[mujoco.Renderer.__module__].gl_context.GLContext = egl.GLContext
+    mujoco.GLContext = egl.GLContext
+    os.environ["MUJOCO_GL"] = "egl"  # what dm_control, imported later, reads
+    return True
 
 
 def _headless_linux() -> bool:
@@ -63,7 +83,8 @@ def setup_gl() -> str | None:
     (:func:`default_gl_backend`). For ``egl`` / ``osmesa``, an unset ``PYOPENGL_PLATFORM`` is set
     to match (dm_control and PyOpenGL read it); a different value raises, since frames would come
     from the wrong library. When ``mujoco`` was imported headless before ``MUJOCO_GL`` was set, it
-    has picked GLFW, which cannot render without a display: ConfigError saying how to fix it.
+    has picked GLFW, which cannot render without a display: its renderer is pointed at EGL
+    (ConfigError saying how to fix it where EGL cannot load).
     Raises :class:`~stable_worldmodel.errors.DependencyNotInstalled` (with the pip command) when
     the ``mujoco`` extra (mujoco, dm_control, ogbench) is not installed.
     """
@@ -78,10 +99,12 @@ def setup_gl() -> str | None:
         )
     backend = default_gl_backend()
     if backend is None and _headless_linux():
-        raise ConfigError(
-            "mujoco was imported before MUJOCO_GL was set, so it picked GLFW, which cannot render without a "
-            "display; set MUJOCO_GL=egl in the environment, or import stable_worldmodel before mujoco"
-        )
+        if not _adopt_egl():
+            raise ConfigError(
+                "mujoco was imported before MUJOCO_GL was set, so it picked GLFW, which cannot render without a "
+                "display, and EGL could not be loaded instead; set MUJOCO_GL=egl in the environment"
+            )
+        backend = "egl"
     if backend in ("egl", "osmesa"):
         platform = os.environ.setdefault("PYOPENGL_PLATFORM", backend)
         if platform != backend:

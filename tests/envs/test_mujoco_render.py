@@ -47,20 +47,39 @@ _HEADLESS = (
 )
 
 
-def test_mujoco_imported_after_the_package_renders_headless():
+def test_importing_the_package_sets_no_environment_variable():
     code = _HEADLESS + (
-        "import stable_worldmodel; import mujoco; "
-        "from stable_worldmodel.envs.mujoco_render import MjRenderer, setup_gl;"
-        f"setup_gl(); m = mujoco.MjModel.from_xml_string({XML!r}); d = mujoco.MjData(m); mujoco.mj_forward(m, d);"
-        "r = MjRenderer(m, 16, 16); print(os.environ['MUJOCO_GL'], r.render(d, 'c').std() > 0); r.close()"
+        "before = dict(os.environ); import stable_worldmodel, sys; "
+        "print(dict(os.environ) == before, 'mujoco' in sys.modules)"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
-    assert out.stdout.split() == ["egl", "True"], out.stderr[-2000:]
+    assert out.stdout.split() == ["True", "False"], out.stderr[-2000:]
 
 
-def test_mujoco_imported_first_without_mujoco_gl_gets_a_typed_error():
+@pytest.mark.parametrize(
+    "first", ["import stable_worldmodel; import mujoco", "import mujoco; import stable_worldmodel"]
+)
+def test_mujoco_imported_before_our_envs_still_renders_headless(first):
+    """``mujoco`` imported before MUJOCO_GL was chosen picks GLFW (no display): setup_gl points its
+    renderer at EGL, whatever the import order."""
+    code = (
+        _HEADLESS
+        + first
+        + (
+            "; from stable_worldmodel.envs.mujoco_render import MjRenderer, setup_gl;"
+            f"print(setup_gl()); m = mujoco.MjModel.from_xml_string({XML!r}); d = mujoco.MjData(m); "
+            "mujoco.mj_forward(m, d); r = MjRenderer(m, 16, 16); "
+            "print(os.environ['MUJOCO_GL'], os.environ['PYOPENGL_PLATFORM'], r.render(d, 'c').std() > 0); r.close()"
+        )
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
+    assert out.stdout.split() == ["egl", "egl", "egl", "True"], out.stderr[-2000:]
+
+
+def test_mujoco_imported_first_with_egl_unloadable_gets_a_typed_error():
     code = _HEADLESS + (
-        "import mujoco; from stable_worldmodel.envs.mujoco_render import setup_gl\n"
+        "import mujoco; os.environ['PYOPENGL_PLATFORM'] = 'glx'\n"
+        "from stable_worldmodel.envs.mujoco_render import setup_gl\n"
         "try:\n    setup_gl()\nexcept Exception as e:\n    print(type(e).__name__, e)"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60)
