@@ -15,6 +15,9 @@ The contract every model follows (shapes: ``B`` envs, ``S`` candidates, ``T`` hi
 -> (B, S)`` and ``loss(batch) -> {"loss": ..., named terms}``. The goal-conditioned baselines
 (``gcbc``, ``gcivl``, ``gciql``: :class:`~stable_worldmodel.wm.gcrl.GCRL`) act instead of
 planning: ``get_action(info) -> (B, A)`` and ``loss(batch)`` (see :mod:`stable_worldmodel.wm.gcrl`).
+``make("gcbc")`` builds that ``GCRL``; ``GCBC`` (:mod:`stable_worldmodel.wm.gcbc`) is release 0.0.3's
+class of the same name (one action per window), kept for its checkpoints: each refuses the
+other's weights with a CheckpointError naming the right class.
 ``prejepa`` (alias ``dinowm``: :class:`~stable_worldmodel.wm.prejepa.PreJEPA`, DINO-WM) plans on
 the patch tokens of a frozen encoder (:func:`~stable_worldmodel.wm.backbones.create_backbone`),
 whose features the trainer caches on disk (:mod:`stable_worldmodel.train.features`). ``frame``

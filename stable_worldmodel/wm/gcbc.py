@@ -1,7 +1,8 @@
 """GCBC as release 0.0.3 names it (``stable_worldmodel.wm.gcbc``): ``GCBC``, its ``Predictor``
 (one aggregated action per window) and ``Embedder``. Same constructors and ``state_dict`` keys
-as 0.0.3, so its checkpoints load. The registry's ``gcbc`` is the newer
-:class:`~stable_worldmodel.wm.gcrl.GCRL` (upstream 0.1.1), which predicts an action per frame.
+as 0.0.3, so its checkpoints load. The registry's ``gcbc`` (``make("gcbc")``, ``swm train gcbc``)
+is the newer :class:`~stable_worldmodel.wm.gcrl.GCRL` (upstream 0.1.1), which predicts an action
+per frame; loading one's weights into the other raises CheckpointError naming the right class.
 
 Shapes (``B`` batch, ``T`` frames, ``P`` tokens per frame, ``d`` width, ``A`` action)::
 
@@ -67,6 +68,12 @@ class GCBC(GoalImageEncoding, nn.Module):
     predictor on a frozen encoder)."""
 
     detach_embeddings = True
+    head_prefix = "predictor."
+    other_family = (
+        "action_predictor.",
+        "a GCRL (what swm.wm.make('gcbc') and `swm train gcbc` build, upstream 0.1.1's gcbc: an action per "
+        "frame); load it with swm.wm.load_pretrained(...) or swm.wm.GCRL",
+    )
 
     def __init__(
         self,

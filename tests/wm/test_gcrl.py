@@ -13,7 +13,7 @@ from _tiny import ACTION_DIM, IMAGE, assert_close, images, randn
 
 import stable_worldmodel.wm as wm
 from stable_worldmodel import keys
-from stable_worldmodel.errors import ConfigError, DatasetFormatError, SpaceError, UnknownNameError
+from stable_worldmodel.errors import CheckpointError, ConfigError, DatasetFormatError, SpaceError, UnknownNameError
 from stable_worldmodel.wm.gcrl.module import (
     DoublePredictorWrapper,
     Embedder,
@@ -259,6 +259,29 @@ def test_gcbc_of_release_003():
     assert (
         model.backbone.head.weight.grad is None and model.predictor.action_proj.weight.grad is not None
     )  # frozen backbone
+
+
+def test_the_two_gcbcs_refuse_each_others_weights_by_name():
+    """``make("gcbc")`` (0.1.1's GCRL) and ``swm.wm.GCBC`` (0.0.3) share a name: loading one's
+    weights into the other names the right class, not a list of missing keys."""
+    gcrl = build("gcbc")
+    old = instantiate(
+        {
+            "_target_": "stable_worldmodel.wm.gcbc.GCBC",
+            "encoder": {"_target_": "stable_worldmodel.wm.gcrl.module.ConvLogitsEncoder", "image_size": IMAGE},
+            "predictor": {
+                "_target_": "stable_worldmodel.wm.gcbc.Predictor",
+                **dict(num_patches=1, num_frames=2, dim=8, depth=1, heads=2, mlp_dim=16, dim_head=4),
+                "action_dim": ACTION_DIM,
+            },
+        }
+    )
+    with pytest.raises(CheckpointError, match=r"GCBC weights \(predictor\.\*\), got the weights of a GCRL.*GCRL$"):
+        old.load_state_dict(gcrl.state_dict())
+    with pytest.raises(CheckpointError, match=r"GCRL weights .*release 0\.0\.3's GCBC.*swm\.wm\.GCBC"):
+        gcrl.load_state_dict(old.state_dict())
+    gcrl.load_state_dict(build("gcbc", seed=1).state_dict())  # its own family loads as before
+    old.load_state_dict(old.state_dict())
 
 
 # -- checkpoints ---------------------------------------------------------------------------------

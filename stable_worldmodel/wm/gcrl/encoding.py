@@ -13,7 +13,7 @@ import torch
 from torch import nn
 
 from ... import keys
-from ...errors import ConfigError, SpaceError, UnknownNameError
+from ...errors import CheckpointError, ConfigError, SpaceError, UnknownNameError
 
 __all__ = ["GoalImageEncoding", "require"]
 
@@ -32,6 +32,28 @@ class GoalImageEncoding:
     interpolate_pos_encoding: bool
     #: 0.0.3's GCBC stops the gradient at the encoder output (a frozen backbone)
     detach_embeddings = False
+    #: the state-dict prefix of this class's action head, and the other family's: its prefix and
+    #: what it is (two classes answer to "gcbc": see :meth:`load_state_dict`)
+    head_prefix = ""
+    other_family: tuple[str, str] = ("", "")
+
+    def load_state_dict(self, state_dict: Mapping[str, Any], strict: bool = True, assign: bool = False):
+        """``nn.Module.load_state_dict``, with a :class:`~stable_worldmodel.errors.CheckpointError`
+        naming the right class when ``state_dict`` holds the other goal-conditioned family's
+        weights (0.0.3's ``GCBC`` and 0.1.1's ``GCRL``, which ``make("gcbc")`` builds), instead of
+        torch's list of missing and unexpected keys."""
+        prefix, what = self.other_family
+        names = list(state_dict)
+        if (
+            prefix
+            and any(k.startswith(prefix) for k in names)
+            and not any(k.startswith(self.head_prefix) for k in names)
+        ):
+            raise CheckpointError(
+                f"{type(self).__name__}.load_state_dict requires {type(self).__name__} weights "
+                f"({self.head_prefix}*), got the weights of {what}"
+            )
+        return super().load_state_dict(state_dict, strict=strict, assign=assign)
 
     def _image_encoder(self) -> nn.Module:  # pragma: no cover - abstract
         raise NotImplementedError("_image_encoder() -> the module that embeds (N, C, h, w) images")

@@ -56,6 +56,12 @@ class GCRL(GoalImageEncoding, nn.Module):
     from its EMA teacher, updated at the start of every training ``loss`` call.
     """
 
+    head_prefix = "action_predictor."
+    other_family = (
+        "predictor.",
+        "release 0.0.3's GCBC (one action per window); load it with stable_worldmodel.wm.gcbc.GCBC (swm.wm.GCBC)",
+    )
+
     def __init__(
         self,
         encoder: nn.Module,
