@@ -63,6 +63,12 @@ class WorkerError(SWMError, RuntimeError):
     workers cannot be started or used from here (an unguarded script, a forked child)."""
 
 
+class DatasetNotFoundError(ConfigError, FileNotFoundError):
+    """A dataset name or path that names nothing on disk; the message says where it looked and
+    which datasets are there. Both a ``FileNotFoundError`` (what 0.1.1's ``load_dataset`` raised)
+    and a ``ValueError`` (0.0.3's ``dataset_info``)."""
+
+
 class DatasetBusyError(SWMError, BlockingIOError):
     """A dataset that another writer (named in the message) is writing."""
 

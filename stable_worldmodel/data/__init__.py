@@ -38,6 +38,7 @@ _ATTRS: dict[str, str] = {
     "repair": "_superblock",
     "record_video_from_dataset": "video",
     "load_dataset": "utils",
+    "resolve_dataset": "utils",
     "column_normalizer": "utils",
     "convert": "utils",
     "FolderWriter": "folder",
@@ -85,7 +86,7 @@ if TYPE_CHECKING:  # pragma: no cover
         world_info,
     )
     from .normalization import IdentityScaler, PercentileScaler, ZScoreScaler, get_scaler  # noqa: F401
-    from .utils import column_normalizer, load_dataset  # noqa: F401
+    from .utils import column_normalizer, load_dataset, resolve_dataset  # noqa: F401
     from .video import record_video_from_dataset  # noqa: F401
     from .video_dataset import VideoDataset, VideoWriter, write_video_dataset  # noqa: F401
     from .writer import HDF5Writer  # noqa: F401

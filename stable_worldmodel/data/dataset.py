@@ -192,6 +192,13 @@ class Dataset(_TorchDataset):
                 raise missing_column(type(self).__name__, name, cols)
         return list(names)
 
+    def column_shape(self, col: str) -> tuple[tuple[int, ...], np.dtype]:
+        """Per-row shape and dtype of ``col``, from its first row (a reader that knows them from
+        its metadata, like :class:`~stable_worldmodel.data.HDF5Dataset`, answers without reading)."""
+        self.check_keys([col])
+        row = np.asarray(self._read(col, 0, 1))
+        return tuple(int(v) for v in row.shape[1:]), row.dtype
+
     @property
     def keys_to_load(self) -> list[str]:
         return self.column_names

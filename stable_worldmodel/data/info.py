@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import functools
 import logging
+import os
 import re
 import shutil
 from pathlib import Path
@@ -12,7 +13,7 @@ from typing import Any, TypedDict
 import numpy as np
 
 from ..errors import ConfigError, did_you_mean, unknown_name
-from .utils import DATASETS_SUBFOLDER, get_cache_dir
+from .utils import DATASETS_SUBFOLDER, dataset_candidates, get_cache_dir, resolve_dataset
 
 logger = logging.getLogger(__name__)
 
@@ -75,9 +76,12 @@ def _dataset_dirs(root: Path) -> list[Path]:
     return found
 
 
-def list_datasets() -> list[str]:
-    """Names of the datasets in the cache: ``<name>.h5`` files and dataset folders of any registered format."""
-    root = get_cache_dir()
+def list_datasets(cache_dir: str | os.PathLike | None = None) -> list[str]:
+    """Names of the datasets in the cache (or ``cache_dir``): ``<name>.h5`` files and dataset
+    folders of any registered format."""
+    root = Path(cache_dir).expanduser() if cache_dir is not None else get_cache_dir()
+    if not root.is_dir():
+        return []
     dirs = {p.relative_to(root).as_posix() for p in _dataset_dirs(root)}
     names = {
         p.relative_to(root).with_suffix("").as_posix()
@@ -131,26 +135,6 @@ def _hidden(path: Path, root: Path) -> bool:
     return any(p.startswith(".") for p in parts) or parts[0] == "checkpoints"
 
 
-def _candidates(root: Path, name: str) -> tuple[Path, ...]:
-    """Where dataset ``name`` may be: ``<name>.h5`` or ``<name>/``, in the cache or its ``datasets/``."""
-    return (
-        root / f"{name}.h5",
-        root / name,
-        root / DATASETS_SUBFOLDER / f"{name}.h5",
-        root / DATASETS_SUBFOLDER / name,
-    )
-
-
-def _dataset_path(name: str) -> Path:
-    root = get_cache_dir()
-    for path in _candidates(root, name):
-        if path.exists():
-            return path
-    raise ConfigError(
-        f"dataset_info requires a dataset in {root}, got {name!r} (not found).{did_you_mean(name, list_datasets())}"
-    )
-
-
 def dataset_info(name: str) -> dict[str, Any]:
     """Metadata of cached dataset ``name``: name, path, format, num_episodes, num_steps,
     columns, obs_shape, action_shape, goal_shape, variation, episode lengths summary
@@ -158,7 +142,7 @@ def dataset_info(name: str) -> dict[str, Any]:
     from ..errors import DatasetFormatError
     from .format import detect_format, list_formats
 
-    path = _dataset_path(name)
+    path = resolve_dataset(name, who="dataset_info")
     fmt = detect_format(path)
     if fmt is None:
         raise DatasetFormatError(
@@ -169,8 +153,7 @@ def dataset_info(name: str) -> dict[str, Any]:
 
 def delete_dataset(name: str) -> Path:
     """Delete cached dataset ``name`` (its ``.h5`` file or directory); returns the removed path."""
-    root = get_cache_dir()
-    for path in _candidates(root, name):
+    for path in dataset_candidates(name):  # in the cache only: never a folder that a relative path names
         if path.is_file():
             path.unlink()
             path.with_name(f".{path.name}.partial").unlink(missing_ok=True)

@@ -12,7 +12,9 @@ __all__ = [
     "column_normalizer",
     "dataset_file",
     "get_cache_dir",
+    "dataset_candidates",
     "load_dataset",
+    "resolve_dataset",
     "resolve_dataset_dir",
     "resolve_dataset_path",
 ]
@@ -108,12 +110,12 @@ def resolve_dataset_path(
     path = Path(name).expanduser()
     if str(name).endswith(suffix) or path.is_file():
         return path
-    if path.is_dir() and any(path.glob(f"shard_*{suffix}")):
+    if _is_shard_folder(path, suffix):
         return path
     root = _root(cache_dir)
     folder = root / str(name)
     if _folder_like(str(name)):  # a sharded dataset's folder, or nothing ('x/' + suffix would be x/.h5)
-        if folder.is_dir() and any(folder.glob(f"shard_*{suffix}")):
+        if _is_shard_folder(folder, suffix):
             return folder
         from ..errors import ConfigError
 
@@ -122,24 +124,27 @@ def resolve_dataset_path(
             f"(unless it names a folder of shard_*{suffix} files), "
             f"got {str(name)!r}; did you mean {_strip_seps(str(name))!r}?"
         )
-    found = root / f"{name}{suffix}"
-    in_sub = root / DATASETS_SUBFOLDER / f"{name}{suffix}"
-    if not found.exists() and not in_sub.exists() and folder.is_dir() and any(folder.glob(f"shard_*{suffix}")):
-        return folder
-    return in_sub if not found.exists() and in_sub.exists() else found
+    for candidate in dataset_candidates(str(name), cache_dir, suffix):
+        if candidate.is_file() if candidate.name.endswith(suffix) else _is_shard_folder(candidate, suffix):
+            return candidate
+    return root / f"{name}{suffix}"
+
+
+def _is_shard_folder(path: Path, suffix: str = ".h5") -> bool:
+    return path.is_dir() and any(path.glob(f"shard_*{suffix}"))
 
 
 def resolve_dataset_dir(name: str | os.PathLike, cache_dir: str | os.PathLike | None = None) -> Path:
-    """``name`` as a directory path when it exists or is absolute, else ``<cache_dir>/<name>``
-    (or ``<cache_dir>/datasets/<name>`` when only that one exists)."""
+    """``name`` as a directory path when it exists or is absolute, else the first folder of
+    :func:`dataset_candidates` that exists (``<cache_dir>/<name>``, ``<cache_dir>/datasets/<name>``),
+    else ``<cache_dir>/<name>``."""
     path = Path(name).expanduser()
     if path.is_dir() or path.is_absolute():
         return path
-    root = _root(cache_dir)
-    for candidate in (root / str(name), root / DATASETS_SUBFOLDER / str(name)):
-        if candidate.exists():
+    for candidate in dataset_candidates(str(name), cache_dir):
+        if candidate.is_dir():
             return candidate
-    return path if len(path.parts) > 1 else root / str(name)
+    return path if len(path.parts) > 1 else _root(cache_dir) / str(name)
 
 
 def dataset_file(name: Any, cache_dir: str | os.PathLike | None = None, suffix: str = ".h5") -> Path:
@@ -176,37 +181,57 @@ def dataset_file(name: Any, cache_dir: str | os.PathLike | None = None, suffix: 
     return root / f"{text}{suffix}"
 
 
-def _find_dataset(name: str, cache_dir: str | os.PathLike | None) -> Path:
-    """The existing file or folder that ``name`` names: a path, or a name in the cache folder
-    (``<name>``, ``<name>.h5``, and the same inside ``datasets/``, where 0.1.1 keeps them)."""
-    from ..errors import did_you_mean
+def dataset_candidates(name: str, cache_dir: str | os.PathLike | None = None, suffix: str = ".h5") -> list[Path]:
+    """Where a dataset named ``name`` may be in the cache folder, in the order they are tried:
+    ``<name><suffix>``, ``<name>/`` (a folder format, or shards), then both inside ``datasets/``
+    (where 0.1.1 keeps them). A name ending in a separator names only folders."""
+    root = _root(cache_dir)
+    text = _strip_seps(name) if _folder_like(name) else name
+    found = []
+    for base in (root, root / DATASETS_SUBFOLDER):
+        if not _folder_like(name):
+            found.append(base / f"{text}{suffix}")
+        found.append(base / text)
+    return found
 
-    path = Path(name).expanduser()
+
+def resolve_dataset(
+    name: str | os.PathLike, cache_dir: str | os.PathLike | None = None, *, who: str = "load_dataset"
+) -> Path:
+    """The existing file or folder that dataset ``name`` names: a path (absolute, or existing
+    relative to the working folder), else the first of :func:`dataset_candidates` that exists.
+
+    The one lookup of a dataset by name, whatever its format (:func:`load_dataset`, the trainer,
+    ``dataset_info``, ``delete_dataset``). Raises
+    :class:`~stable_worldmodel.errors.DatasetNotFoundError` (a ``FileNotFoundError``) naming
+    ``who``, the places it looked and the closest cached names.
+    """
+    from ..errors import DatasetNotFoundError, did_you_mean
+
+    text = os.fspath(name)
+    path = Path(text).expanduser()
     if path.is_absolute() or path.exists():
         if path.exists():
             return path
-        raise FileNotFoundError(f"load_dataset requires an existing dataset, got {name!r}: the path does not exist")
+        raise DatasetNotFoundError(f"{who} requires an existing dataset, got {text!r}: the path does not exist")
     root = _root(cache_dir)
-    candidates = [
-        root / name,
-        root / f"{name}.h5",
-        root / DATASETS_SUBFOLDER / name,
-        root / DATASETS_SUBFOLDER / f"{name}.h5",
-    ]
+    candidates = dataset_candidates(text, cache_dir)
     for candidate in candidates:
         if candidate.exists():
             return candidate
     from .info import list_datasets
 
-    known = list_datasets() if cache_dir is None else []
+    known = list_datasets(cache_dir)
     hub = (
         " Downloading from the Hugging Face Hub is not supported: download it into that folder first."
-        if "/" in name
+        if "/" in text.strip("/")
         else ""
     )
-    raise FileNotFoundError(
-        f"load_dataset requires an existing dataset, got {name!r}: it does not exist in {root} "
-        f"(looked for {', '.join(str(c.relative_to(root)) for c in candidates)}).{did_you_mean(name, known)}{hub}"
+    looked = ", ".join(str(c.relative_to(root)) for c in candidates)
+    there = ", ".join(known[:10]) + (f" and {len(known) - 10} more" if len(known) > 10 else "") or "(none)"
+    raise DatasetNotFoundError(
+        f"{who} requires an existing dataset, got {text!r}: it does not exist in {root} "
+        f"(looked for {looked}).{did_you_mean(text, known)}{hub} Datasets there: {there}"
     )
 
 
@@ -241,7 +266,7 @@ def load_dataset(
             f"load_dataset requires a local dataset, got the URL {text!r}: "
             f"no registered format ({', '.join(list_formats())}) reads URLs"
         )
-    path = _find_dataset(text, cache_dir)
+    path = resolve_dataset(text, cache_dir)
     if path.is_dir() and format is None and detect_format(path) is None:
         files = sorted(path.glob("*.h5")) + sorted(path.glob("*.hdf5"))
         if len(files) == 1:  # a folder holding one HDF5 file (0.1.1's cache layout)

@@ -29,7 +29,7 @@ import numpy as np
 import torch
 
 from .. import keys
-from ..errors import ConfigError, DatasetFormatError, did_you_mean
+from ..errors import ConfigError, DatasetFormatError
 from ..wm.preprocess import Normalizer, preprocess_images
 from .goals import GoalConditioned, GoalSampler
 
@@ -66,53 +66,40 @@ class TrainData:
     """
 
     def __init__(self, name: str, cfg: Any, seed: int, device: torch.device, cache_dir: str | None = None):
-        from ..data import HDF5Dataset
-        from ..data.utils import resolve_dataset_path
+        from ..data.utils import load_dataset, resolve_dataset
 
         self.cfg, self.device, self.seed = cfg, device, seed
-        path = resolve_dataset_path(name, cache_dir)
-        if not path.is_file():
-            names = sorted(p.stem for p in path.parent.glob("*.h5"))
-            raise FileNotFoundError(
-                f"Training requires a recorded .h5 dataset, got {str(name)!r} "
-                f"({path} does not exist).{did_you_mean(str(name), names)} "
-                f"Datasets in {path.parent}: {', '.join(names) or '(none)'}"
-            )
-        self.dataset = HDF5Dataset(name, frameskip=cfg.frameskip, num_steps=cfg.num_steps, cache_dir=cache_dir)
+        self.path = resolve_dataset(name, cache_dir, who="Training")  # any registered format
+        self.dataset = load_dataset(self.path, frameskip=cfg.frameskip, num_steps=cfg.num_steps)
         self.extra_widths = extra_columns(cfg)
         self.extra_keys = list(self.extra_widths)
         missing = [k for k in (keys.PIXELS, keys.ACTION, *self.extra_keys) if k not in self.dataset.column_names]
         if missing:
             raise DatasetFormatError(
-                f"Training requires dataset columns {missing} in {self.dataset.path}, "
-                f"got {sorted(self.dataset.column_names)}"
+                f"Training requires dataset columns {missing} in {self.path}, got {sorted(self.dataset.column_names)}"
             )
         self.needs_reward = bool(cfg.needs_reward)
         if self.needs_reward and keys.REWARD not in self.dataset.column_names:
             model = cfg.model_name or type(cfg).__name__
             raise DatasetFormatError(
                 f"Training {model} requires a {keys.REWARD!r} column, got none in dataset {str(name)!r} "
-                f"({self.dataset.path}), "
+                f"({self.path}), "
                 f"whose columns are {sorted(self.dataset.column_names)}. Record one: World.record_dataset(...) and "
                 "`swm collect` store the env's reward of every step as 'reward' (an env whose reward is 0 everywhere "
                 "gives nothing to learn)"
             )
-        self.dataset = HDF5Dataset(
-            name,
+        self.dataset = load_dataset(
+            self.path,
             frameskip=cfg.frameskip,
             num_steps=cfg.num_steps,
             keys_to_load=[keys.PIXELS, keys.ACTION, *self.extra_keys],
-            cache_dir=cache_dir,
         )
         shape, _ = self.dataset.column_shape(keys.PIXELS)
         if len(shape) != 3 or shape[-1] not in (1, 3):
-            raise DatasetFormatError(
-                f"Training requires pixels of shape (N, H, W, 3), got {shape} in {self.dataset.path}"
-            )
+            raise DatasetFormatError(f"Training requires pixels of shape (N, H, W, 3), got {shape} in {self.path}")
         if shape[-1] != len(cfg.image_mean):
             raise ConfigError(
-                f"Training requires {len(cfg.image_mean)}-channel images, "
-                f"got {shape[-1]} channels in {self.dataset.path}"
+                f"Training requires {len(cfg.image_mean)}-channel images, got {shape[-1]} channels in {self.path}"
             )
         self.image_shape = tuple(int(v) for v in shape)
         self.action_dim = int(np.prod(self.dataset.column_shape(keys.ACTION)[0]))
@@ -121,7 +108,7 @@ class TrainData:
             if width != expected:
                 raise ConfigError(
                     f"Training requires {key}_dim equal to the width of column {key!r}, "
-                    f"got {key}_dim={expected} and {width} in {self.dataset.path}"
+                    f"got {key}_dim={expected} and {width} in {self.path}"
                 )
         self.train_episodes, self.val_episodes = split_episodes(self.dataset.num_episodes, cfg.val_fraction, seed)
         eps, _ = self.dataset._locate_many(np.arange(len(self.dataset), dtype=np.int64))
@@ -131,7 +118,7 @@ class TrainData:
             longest = int(np.max(self.dataset.lengths)) if self.dataset.num_episodes else 0
             raise DatasetFormatError(
                 f"Training requires episodes of at least num_steps * frameskip = {cfg.num_steps} * {cfg.frameskip} = "
-                f"{self.dataset.span} steps, got none in the train split of {self.dataset.path} (longest: {longest}); "
+                f"{self.dataset.span} steps, got none in the train split of {self.path} (longest: {longest}); "
                 "lower --frameskip / history or record longer episodes"
             )
         self.normalizer = self._fit_normalizer()
@@ -301,8 +288,8 @@ class TrainData:
         env = getattr(self.dataset, "attrs", {}).get(ENV_ID_ATTR)  # recorded by World.record_dataset
         return {
             **({"env": env} if env else {}),
-            "dataset": self.dataset.name,
-            "dataset_path": str(self.dataset.path),
+            "dataset": self.path.stem,
+            "dataset_path": str(self.path),
             "episodes": int(self.dataset.num_episodes),
             "train_episodes": self.train_episodes.tolist(),
             "val_episodes": self.val_episodes.tolist(),

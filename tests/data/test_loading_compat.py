@@ -125,3 +125,33 @@ def test_convert_copies_every_episode_to_another_format(tmp_path, make_h5):
         np.testing.assert_array_equal(np.asarray(b.get_col_data(col)), np.asarray(a.get_col_data(col)), err_msg=col)
     folder = convert(str(src), tmp_path / "folder", dest_format="folder", progress=False)
     assert load_dataset(str(folder)).num_episodes == 2
+
+
+def test_one_lookup_of_datasets_by_name(make_h5, tmp_path):
+    """load_dataset, dataset_info, HDF5Dataset(name), the trainer and delete_dataset find a name
+    in the same places, in the same order: ``<name>.h5``, ``<name>/``, then both in ``datasets/``."""
+    from stable_worldmodel.data.utils import convert, dataset_candidates, resolve_dataset, resolve_dataset_path
+    from stable_worldmodel.errors import DatasetNotFoundError
+
+    home = data.get_cache_dir()
+    source = make_h5((3, 4), name="src")
+    assert [p.relative_to(home).as_posix() for p in dataset_candidates("x")] == [
+        "x.h5",
+        "x",
+        "datasets/x.h5",
+        "datasets/x",
+    ]
+    sub = data.get_cache_dir(sub_folder="datasets")
+    convert(source, sub / "x", dest_format="folder", progress=False)
+    for found in (resolve_dataset("x"), data.load_dataset("x").path, resolve_dataset(data.dataset_info("x")["path"])):
+        assert found == sub / "x"
+    (sub / "x.h5").write_bytes(source.read_bytes())  # datasets/x.h5 comes before datasets/x/
+    assert resolve_dataset("x") == resolve_dataset_path("x") == data.load_dataset("x").path == sub / "x.h5"
+    (home / "x.h5").write_bytes(source.read_bytes())  # and the cache root before datasets/
+    assert resolve_dataset("x") == resolve_dataset_path("x") == HDF5Dataset("x").path == home / "x.h5"
+    assert data.delete_dataset("x") == home / "x.h5" and data.delete_dataset("x") == sub / "x.h5"
+    assert data.delete_dataset("x") == sub / "x" and not (sub / "x").exists()
+    for call in (lambda: data.load_dataset("x"), lambda: data.dataset_info("x"), lambda: resolve_dataset("x")):
+        with pytest.raises(DatasetNotFoundError, match=r"looked for x\.h5, x, datasets/x\.h5, datasets/x\)") as err:
+            call()
+        assert isinstance(err.value, FileNotFoundError) and isinstance(err.value, ValueError)  # 0.1.1 and 0.0.3

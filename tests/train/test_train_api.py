@@ -289,7 +289,8 @@ def test_unknown_model_suggests_the_close_one(refused):
 def test_unknown_dataset_lists_the_cached_ones(refused, toy):
     refused(
         FileNotFoundError,
-        rf"'tyo' \(.*tyo\.h5 does not exist\)\. Did you mean '{toy}'\? Datasets in .*: {toy}$",
+        rf"Training requires an existing dataset, got 'tyo': it does not exist in .*"
+        rf"\(looked for tyo\.h5, tyo, datasets/tyo\.h5, datasets/tyo\)\. Did you mean '{toy}'\? Datasets there: {toy}$",
         dataset="tyo",
     )
 
@@ -380,3 +381,24 @@ def test_a_diverging_run_stops_at_its_next_log(fit, monkeypatch):
         FloatingPointError, match=r"Training diverged: loss \[.*nan.*\] in the 5 steps up to step 5; lower --lr"
     ):
         fit("dummy", "nan", steps=20, log_every=5)
+
+
+@pytest.mark.parametrize("fmt", ["folder", "video"])
+def test_trains_on_any_registered_format(fit, toy, _stablewm_home, fmt):
+    """The trainer finds and opens datasets through the format registry: the toy recording
+    converted to another format trains, on the same split and normalizers as the .h5 (its frames
+    are JPEG there, so the losses are close, not equal)."""
+    from stable_worldmodel.data.utils import convert
+
+    convert(toy, _stablewm_home / f"toy-{fmt}", dest_format=fmt, progress=False)
+    (_stablewm_home / f"{toy}.h5").rename(_stablewm_home / "elsewhere.h5")  # only the converted copy is found
+    result = fit("lewm", f"from-{fmt}", dataset=f"toy-{fmt}", steps=10, log_every=5)
+    assert result.steps == 10 and math.isfinite(result.train_loss)
+    protocol = json.loads((result.folder / "protocol.json").read_text())
+    assert protocol["dataset"] == f"toy-{fmt}" and protocol["dataset_path"] == str(_stablewm_home / f"toy-{fmt}")
+    (_stablewm_home / "elsewhere.h5").rename(_stablewm_home / f"{toy}.h5")
+    reference = fit("lewm", f"from-h5-{fmt}", steps=10, log_every=5)
+    same = json.loads((reference.folder / "protocol.json").read_text())
+    for key in ("train_episodes", "val_episodes", "normalizers", "dataset_image_shape", "action_dim"):
+        assert protocol[key] == same[key], key
+    assert train_losses(result.folder)[0][1] == pytest.approx(train_losses(reference.folder)[0][1], rel=0.2)
