@@ -16,6 +16,13 @@ Figures (each the best of ``--repeats`` interleaved runs, ``--reads`` times more
   fresh reader: each block is checked on its first read;
 * ``hash_only``: ``row_checksums`` over the raw columns' rows in memory (the checking's own cost).
 
+``--e2e`` adds the work users run, where the cost shows (or not) end to end:
+
+* ``record``: ``World("swm/PushT-v1", num_envs=4, image_shape=(64, 64)).record_dataset`` (the random
+  policy, ``--e2e-episodes`` episodes of 50 steps);
+* ``train_epoch``: one pass of a ``torch.utils.data.DataLoader`` (batch 32, no workers) over
+  ``HDF5Dataset(num_steps=4)`` of that recording, every item read (pixels, action, proprio, state).
+
 ``time`` is the extra time the checksums take (+5% = 5% slower). The file size with and without
 checksums is printed too. Prints, never asserts.
 """
@@ -105,6 +112,61 @@ def hash_only(episodes: list[dict]) -> float:
     return time.perf_counter() - t0
 
 
+def record_world(path: Path, episodes: int, checksum: bool) -> float:
+    """``World.record_dataset`` on PushT-v1 with ``HDF5Writer(checksum=checksum)``."""
+    import stable_worldmodel as swm
+    from stable_worldmodel.data import writer
+
+    world = swm.World("swm/PushT-v1", num_envs=4, image_shape=(64, 64), max_episode_steps=50, verbose=0)
+    world.set_policy(swm.policy.RandomPolicy(seed=0))
+    real = writer.HDF5Writer
+    writer.HDF5Writer = lambda p, **kw: real(p, checksum=checksum, **kw)  # what record_dataset imports
+    try:
+        t0 = time.perf_counter()
+        world.record_dataset(path.stem, episodes=episodes, seed=0, cache_dir=path.parent)
+        return time.perf_counter() - t0
+    finally:
+        writer.HDF5Writer = real
+        world.close()
+
+
+def train_epoch(path: Path) -> float:
+    """One DataLoader pass over every item of the recording (batch 32, no workers)."""
+    import torch
+
+    from stable_worldmodel.data import HDF5Dataset
+
+    ds = HDF5Dataset(path=path, preload=False, num_steps=4, keys_to_load=["pixels", "action", "proprio", "state"])
+    t0 = time.perf_counter()
+    for _ in torch.utils.data.DataLoader(ds, batch_size=32, shuffle=True, generator=torch.Generator().manual_seed(0)):
+        pass
+    elapsed = time.perf_counter() - t0
+    ds.close()
+    return elapsed
+
+
+def end_to_end(tmp: Path, episodes: int, repeats: int) -> None:
+    best: dict[tuple[str, bool], float] = {}
+    for r in range(repeats):
+        order = (False, True) if r % 2 == 0 else (True, False)
+        for checksum in order:
+            path = tmp / f"e2e_{checksum}_{r}.h5"
+            record(best, "record", checksum, record_world(path, episodes, checksum))
+        for _ in range(5):  # an epoch is short: several per file, alternating
+            for checksum in order:
+                record(best, "train_epoch", checksum, train_epoch(tmp / f"e2e_{checksum}_{r}.h5"))
+        for checksum in order:
+            (tmp / f"e2e_{checksum}_{r}.h5").unlink()
+    print(f"\n[end to end]  swm/PushT-v1 64x64, {episodes} episodes of 50 steps, best of {repeats}")
+    rec_off, rec_on = episodes / best["record", False], episodes / best["record", True]
+    extra = 100 * (best["record", True] / best["record", False] - 1)
+    print(f"{'record':18s} without {rec_off:10.1f} ep/s     with {rec_on:10.1f} ep/s     time {extra:+6.1f}%")
+    off, on = best["train_epoch", False], best["train_epoch", True]
+    print(
+        f"{'train_epoch':18s} without {off:10.2f} s        with {on:10.2f} s        time {100 * (on / off - 1):+6.1f}%"
+    )
+
+
 def record(best: dict, what: str, checksum: bool, seconds: float) -> None:
     best[what, checksum] = min(best.get((what, checksum), float("inf")), seconds)
 
@@ -118,6 +180,8 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=7)
     parser.add_argument("--reads", type=int, default=5, help="of each short read per file and repeat")
     parser.add_argument("--kinds", default="numeric,pixels", help="recordings to run, comma-separated")
+    parser.add_argument("--e2e", action="store_true", help="also time recording PushT-v1 and a training epoch")
+    parser.add_argument("--e2e-episodes", type=int, default=40)
     args = parser.parse_args()
 
     rows = args.episodes * args.length
@@ -160,6 +224,8 @@ def main() -> None:
             extra = 100 * (off / on - 1)
             print(f"{what:18s} without {off:12,.0f} {unit:8s} with {on:12,.0f} {unit:8s} time {extra:+6.1f}%")
         print(f"{'hash_only':18s} {rows / hashed:12,.0f} rows/s (every raw column of a row)")
+    if args.e2e:
+        end_to_end(tmp, args.e2e_episodes, max(3, args.repeats // 2))
 
 
 if __name__ == "__main__":
