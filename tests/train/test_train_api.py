@@ -7,6 +7,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import shutil
 
 import h5py
 import numpy as np
@@ -402,3 +403,15 @@ def test_trains_on_any_registered_format(fit, toy, _stablewm_home, fmt):
     for key in ("train_episodes", "val_episodes", "normalizers", "dataset_image_shape", "action_dim"):
         assert protocol[key] == same[key], key
     assert train_losses(result.folder)[0][1] == pytest.approx(train_losses(reference.folder)[0][1], rel=0.2)
+
+
+def test_trains_on_a_sharded_dataset(fit, toy, _stablewm_home):
+    """A folder of ``shard_*.h5`` files (what ``swm collect --ray`` writes) trains as one dataset."""
+    shards = _stablewm_home / "sharded"
+    shards.mkdir()
+    for i in range(2):
+        shutil.copy(_stablewm_home / f"{toy}.h5", shards / f"shard_{i}.h5")
+    result = fit("lewm", "from-shards", dataset="sharded", steps=4, log_every=2)
+    protocol = json.loads((result.folder / "protocol.json").read_text())
+    assert protocol["dataset_path"] == str(shards) and protocol["episodes"] == 2 * 10
+    assert result.steps == 4 and math.isfinite(result.train_loss)
