@@ -16,6 +16,8 @@ __all__ = [
     "SpaceError",
     "DependencyNotInstalled",
     "DatasetFormatError",
+    "DatasetNotFoundError",
+    "NotEnoughDataError",
     "DatasetBusyError",
     "RunBusyError",
     "UntrustedCheckpointError",
@@ -67,6 +69,11 @@ class DatasetNotFoundError(ConfigError, FileNotFoundError):
     """A dataset name or path that names nothing on disk; the message says where it looked and
     which datasets are there. Both a ``FileNotFoundError`` (what 0.1.1's ``load_dataset`` raised)
     and a ``ValueError`` (0.0.3's ``dataset_info``)."""
+
+
+class NotEnoughDataError(SWMError, RuntimeError):
+    """Asked for more than the data holds: a window longer than every episode, or a sample from
+    an empty replay buffer."""
 
 
 class DatasetBusyError(SWMError, BlockingIOError):

@@ -38,6 +38,8 @@ _ATTRS: dict[str, str] = {
     "repair": "_superblock",
     "record_video_from_dataset": "video",
     "load_dataset": "utils",
+    "ReplayBuffer": "buffer",
+    "classic_filter": "buffer",
     "resolve_dataset": "utils",
     "column_normalizer": "utils",
     "convert": "utils",
@@ -67,6 +69,7 @@ def __dir__() -> list[str]:
 
 if TYPE_CHECKING:  # pragma: no cover
     from ._superblock import repair  # noqa: F401
+    from .buffer import ReplayBuffer, classic_filter  # noqa: F401
     from .compose import ConcatDataset, GoalDataset, MergeDataset  # noqa: F401
     from .dataset import Dataset  # noqa: F401
     from .folder import FolderDataset, FolderWriter, ImageDataset, write_folder_dataset  # noqa: F401

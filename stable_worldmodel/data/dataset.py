@@ -26,7 +26,7 @@ transformed) instead of ``_read``; items, episodes and chunks then come from ``_
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 from typing import Any
 
 import numpy as np
@@ -62,6 +62,15 @@ def image_like(arr: np.ndarray) -> bool:
     return arr.ndim == 4 and is_image_column(arr.shape[1:], arr.dtype)
 
 
+def dense_set(columns: Collection[str] | str | None, owner: str) -> frozenset[str]:
+    """``action`` plus ``columns`` (a name or a collection of names): the columns a window reads
+    at every row (grouped into ``frameskip`` blocks) instead of every ``frameskip``-th row."""
+    extra = [columns] if isinstance(columns, str) else list(columns or ())
+    if not all(isinstance(c, str) for c in extra):
+        raise ConfigError(f"{owner} requires dense_columns to be column names, got {columns!r}")
+    return frozenset({keys.ACTION, *extra})
+
+
 def _episode_array(name: str, value: Any, owner: str) -> np.ndarray:
     """``value`` as a 1-D int64 array of non-negative row counts or offsets."""
     arr = np.asarray(value)
@@ -87,7 +96,12 @@ class Dataset(_TorchDataset):
         num_steps: frames per sample (T).
         transform: optional callable applied to each item dict.
         keys_to_load: columns to put in items (default: all).
+        dense_columns: columns read at every row of a window and grouped into
+            ``(T, frameskip * ...)`` blocks, as ``action`` always is (upstream's main).
     """
+
+    #: ``action`` and the ``dense_columns`` given (see :func:`dense_set`)
+    dense_columns: frozenset[str] = frozenset({keys.ACTION})
 
     def __init__(
         self,
@@ -97,8 +111,10 @@ class Dataset(_TorchDataset):
         num_steps: int = 1,
         transform: Callable[[dict], dict] | None = None,
         keys_to_load: Sequence[str] | None = None,
+        dense_columns: Collection[str] | str | None = None,
     ):
         owner = type(self).__name__
+        self.dense_columns = dense_set(dense_columns, owner)
         self.frameskip = _positive("frameskip", frameskip, owner)
         self.num_steps = _positive("num_steps", num_steps, owner)
         if transform is not None and not callable(transform):
@@ -283,9 +299,9 @@ class Dataset(_TorchDataset):
 
     # -- items --------------------------------------------------------------------------------
     def _row_step(self, col: str) -> int:
-        """A window keeps every row of ``action`` (grouped later) and every ``frameskip``-th row
-        of the other columns."""
-        return 1 if col == keys.ACTION else self.frameskip
+        """A window keeps every row of ``action`` and the other dense columns (grouped later) and
+        every ``frameskip``-th row of the other columns."""
+        return 1 if col in self.dense_columns else self.frameskip
 
     def _row_offsets(self, col: str) -> np.ndarray:
         """Offsets in a window of the rows that ``col`` keeps."""
@@ -311,8 +327,9 @@ class Dataset(_TorchDataset):
         eps, steps = self._locate_many(idx.astype(np.int64))
         starts = self._sample_index()[1][eps] + steps
         cols = {col: self._read_windows(col, starts) for col in self.keys_to_load}
-        if keys.ACTION in cols and group_actions:  # (B, span, A) -> (B, T, frameskip * A)
-            cols[keys.ACTION] = cols[keys.ACTION].reshape(len(starts), self.num_steps, -1)
+        if group_actions:  # (B, span, A) -> (B, T, frameskip * A), the same for every dense column
+            for col in self.dense_columns.intersection(cols):
+                cols[col] = cols[col].reshape(len(starts), self.num_steps, -1)
         return to_tensors(cols, batch=True, owned=True)  # gathered rows are fresh arrays
 
     def _transformed(self, item: dict[str, Any]) -> dict[str, Any]:
@@ -321,8 +338,8 @@ class Dataset(_TorchDataset):
         grouped into ``(T, frameskip * A)`` blocks afterwards."""
         if self.transform is not None:
             item = self.transform(item)
-        if keys.ACTION in item:
-            item[keys.ACTION] = item[keys.ACTION].reshape(self.num_steps, -1)
+        for col in self.dense_columns.intersection(item):
+            item[col] = item[col].reshape(self.num_steps, -1)
         return item
 
     def _load_slice(self, ep_idx: int, start: int, end: int) -> dict[str, Any]:

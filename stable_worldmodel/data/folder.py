@@ -19,9 +19,8 @@ import numpy as np
 from ..errors import ConfigError, DatasetFormatError
 from ._layout import EP_LEN_FILE, EP_OFFSET_FILE, META, Layout, MetaLayout, ReleasedLayout, open_layout
 from .dataset import Dataset
+from .format import per_step_columns, validate_write_mode
 from .utils import resolve_dataset_dir
-
-WRITE_MODES = ("append", "overwrite", "error")
 
 
 def is_media(arr: np.ndarray) -> bool:
@@ -196,8 +195,7 @@ class FolderWriter:
 
     def __init__(self, path: str | os.PathLike, *, mode: str = "append", quality: int = 95):
         owner = type(self).__name__
-        if mode not in WRITE_MODES:
-            raise ConfigError(f"{owner} requires mode to be one of {', '.join(map(repr, WRITE_MODES))}, got {mode!r}")
+        validate_write_mode(mode, owner)
         if not 1 <= int(quality) <= 100:
             raise ConfigError(f"{owner} requires 1 <= quality <= 100, got {quality!r}")
         self.path, self.mode, self.quality = Path(path), mode, int(quality)
@@ -275,7 +273,7 @@ class FolderWriter:
         """Write one episode: media files now, numeric rows at :meth:`close`."""
         if self._closed:
             raise ConfigError(f"{type(self).__name__} requires an open writer, got one already closed")
-        length, cols = self._check(episode)
+        length, cols = self._check(per_step_columns(episode, type(self).__name__))
         ep = len(self._lengths)
         for col, arr in cols.items():
             if is_media(arr):

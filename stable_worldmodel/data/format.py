@@ -24,18 +24,84 @@ tries formats in registration order, built-ins first.
 
 from __future__ import annotations
 
+import logging
 import os
+from collections.abc import Iterable, Mapping
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
 from .. import keys
 from ..errors import ConfigError, did_you_mean
 
-__all__ = ["FORMATS", "Format", "describe", "detect_format", "get_format", "list_formats", "register_format"]
+__all__ = [
+    "EPISODE_DATA_KEY",
+    "FORMATS",
+    "WRITE_MODES",
+    "Format",
+    "Writer",
+    "describe",
+    "detect_format",
+    "get_format",
+    "list_formats",
+    "register_format",
+    "split_episode_data",
+    "validate_write_mode",
+]
+
+logger = logging.getLogger(__name__)
 
 FORMATS: dict[str, type[Format]] = {}
+
+#: the ``mode`` every built-in writer takes (upstream's names): ``"append"`` (the default: extend
+#: a dataset already there, create it otherwise), ``"overwrite"`` (remove it first) or
+#: ``"error"`` (``FileExistsError`` when there is one)
+WRITE_MODES = ("append", "overwrite", "error")
+
+#: the episode-dict key of episode-scoped data (one value per episode, not per step; upstream's
+#: main). No built-in writer stores it: they drop it with a warning (see :func:`split_episode_data`).
+EPISODE_DATA_KEY = "_episode_data"
+
+
+def validate_write_mode(mode: Any, owner: str = "writer") -> str:
+    """``mode`` if it is one of :data:`WRITE_MODES`; :class:`ConfigError` (a ValueError) otherwise."""
+    if not isinstance(mode, str) or mode not in WRITE_MODES:
+        raise ConfigError(
+            f"{owner} requires mode to be one of {', '.join(map(repr, WRITE_MODES))}, "
+            f"got {mode!r}.{did_you_mean(str(mode), WRITE_MODES)}"
+        )
+    return mode
+
+
+def split_episode_data(episode: Mapping[str, Any]) -> tuple[Mapping[str, Any], dict[str, Any]]:
+    """``(per-step columns, episode-scoped data)`` of an episode dict: the second is what it holds
+    under :data:`EPISODE_DATA_KEY` (empty when absent); ``episode`` itself is not changed."""
+    if EPISODE_DATA_KEY not in episode:
+        return episode, {}
+    steps = {k: v for k, v in episode.items() if k != EPISODE_DATA_KEY}
+    return steps, dict(episode[EPISODE_DATA_KEY] or {})
+
+
+def per_step_columns(episode: Mapping[str, Any], owner: str) -> Mapping[str, Any]:
+    """The per-step columns of ``episode``, for a writer that stores no episode-scoped data: a
+    warning names what it drops."""
+    steps, data = split_episode_data(episode)
+    if data:
+        logger.warning("%s stores no episode-scoped data: dropped %s", owner, ", ".join(sorted(map(str, data))))
+    return steps
+
+
+@runtime_checkable
+class Writer(Protocol):
+    """What ``World.collect(writer=...)``, :func:`~stable_worldmodel.data.convert` and
+    ``ReplayBuffer.dump`` write into: a context manager taking episodes (mappings column ->
+    ``(L, ...)`` rows, or per-step lists) one at a time or from an iterable."""
+
+    def __enter__(self) -> Any: ...
+    def __exit__(self, *exc: Any) -> Any: ...
+    def write_episode(self, episode: Mapping[str, Any]) -> None: ...
+    def write_episodes(self, episodes: Iterable[Mapping[str, Any]]) -> None: ...
 
 
 class Format:
@@ -43,6 +109,8 @@ class Format:
 
     name: ClassVar[str] = ""
     summary_options: ClassVar[dict[str, Any]] = {}  # reader arguments that keep summary() cheap
+    #: whether the writer stores episode-scoped data (:data:`EPISODE_DATA_KEY`); none built in does
+    supports_episode_data: ClassVar[bool] = False
 
     @classmethod
     def detect(cls, path: str | os.PathLike) -> bool:

@@ -23,7 +23,7 @@ import re
 import sys
 import time
 from collections import OrderedDict
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Collection, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -214,8 +214,15 @@ class HDF5Dataset(Dataset):
         *,
         preload: bool | None = None,
         path: str | os.PathLike | None = None,
+        dense_columns: Collection[str] | str | None = None,
     ):
-        super().__init__(frameskip=frameskip, num_steps=num_steps, transform=transform, keys_to_load=keys_to_load)
+        super().__init__(
+            frameskip=frameskip,
+            num_steps=num_steps,
+            transform=transform,
+            keys_to_load=keys_to_load,
+            dense_columns=dense_columns,
+        )
         if (name is None) == (path is None):
             raise ConfigError(
                 f"HDF5Dataset requires a dataset name or path=, got {'neither' if name is None else 'both'}"

@@ -56,7 +56,7 @@ from __future__ import annotations
 import logging
 import os
 import weakref
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -67,10 +67,13 @@ from ..errors import ConfigError, DatasetFormatError
 from . import _checksum, _rowsum, _superblock
 from ._index import H5_READ_ERRORS, damaged, not_a_file, read_index
 from ._lock import WriterLock
+from .format import per_step_columns, validate_write_mode
 
 logger = logging.getLogger(__name__)
 
 NEXT_SEED_ATTR = "next_seed"
+#: episodes per commit when :meth:`HDF5Writer.write_episodes` is given a generator
+COMMIT_EPISODES = 32
 #: file attribute naming the env a dataset was recorded from (``World.record_dataset`` writes it)
 ENV_ID_ATTR = "env_id"
 COMPRESS_ROW_BYTES = 1024  # rows this big are compressed (one per chunk); smaller ones are stored raw
@@ -164,6 +167,9 @@ class HDF5Writer:
     episodes, each a mapping column -> array ``(L, ...)`` with the same columns, per-row
     shapes and dtypes as the episodes already in the file.
 
+    ``mode`` (upstream's :data:`~.format.WRITE_MODES`): ``"append"`` (the default: resume the
+    file), ``"overwrite"`` (remove it first) or ``"error"`` (``FileExistsError`` if it exists).
+
     ``checksum`` (default True): a new file stores a checksum per row of each raw column, which
     :class:`~.hdf5.HDF5Dataset` checks on read (see :mod:`._rowsum`). A file keeps what it was
     created with: one without checksums is appended to without, one with them gets them for
@@ -177,9 +183,11 @@ class HDF5Writer:
         *,
         checksum: bool = True,
         attrs: Mapping[str, str] | None = None,
+        mode: str = "append",
     ):
         import h5py
 
+        self.mode = validate_write_mode(mode, "HDF5Writer")
         if not isinstance(checksum, (bool, np.bool_)):
             raise ConfigError(f"HDF5Writer requires checksum to be True or False, got {checksum!r}")
         attrs = dict(attrs or {})
@@ -210,6 +218,13 @@ class HDF5Writer:
         self._lock = WriterLock(self.path, wait).acquire()
         self._unlock = weakref.finalize(self, self._lock.release)
         try:
+            if self.path.exists() and mode == "error":
+                raise FileExistsError(
+                    f"HDF5Writer(mode='error') requires a new dataset, got {self.path}, which exists; "
+                    "pass mode='append' to extend it or mode='overwrite' to replace it"
+                )
+            if self.path.exists() and mode == "overwrite":  # under the lock: no writer of it is running
+                self.path.unlink()
             if self.path.exists():
                 self._resume()
             else:  # a first recording killed before its file was valid left this: it holds nothing
@@ -391,9 +406,28 @@ class HDF5Writer:
             raise DatasetFormatError("HDF5Writer requires episodes of at least one row, got an empty episode")
         return length
 
-    def write_episodes(self, episodes: Sequence[Mapping[str, np.ndarray]], next_seed: int | None = None) -> None:
+    def write_episode(self, episode: Mapping[str, Any]) -> None:
+        """Append one episode and commit it (upstream's ``Writer`` protocol); see :meth:`write_episodes`."""
+        self.write_episodes([episode])
+
+    def write_episodes(self, episodes: Iterable[Mapping[str, Any]], next_seed: int | None = None) -> None:
         """Append ``episodes`` and commit them (rows, then ``ep_offset``, then ``ep_len``, each
-        flushed); ``next_seed`` is stored for resuming."""
+        flushed): a list is committed whole, another iterable (a generator) every
+        :data:`COMMIT_EPISODES` episodes. ``next_seed`` is stored for resuming. An episode maps
+        each column to its rows ``(L, ...)`` (an array, or a list of per-step values)."""
+        if not isinstance(episodes, Sequence):
+            batch: list = []
+            for episode in episodes:
+                batch.append(episode)
+                if len(batch) == COMMIT_EPISODES:
+                    self._commit(batch, None)
+                    batch = []
+            self._commit(batch, next_seed)
+            return
+        self._commit(episodes, next_seed)
+
+    def _commit(self, episodes: Sequence[Mapping[str, Any]], next_seed: int | None) -> None:
+        episodes = [per_step_columns(ep, "HDF5Writer") for ep in episodes]
         if self._closed:
             raise DatasetFormatError(
                 f"HDF5Writer requires an open writer, got a closed one for {self.path}; open a new HDF5Writer to append"

@@ -40,7 +40,7 @@ class FrameConfig(WorldModelConfig):
     frameskip: int = 1
 
     def __post_init__(self) -> None:
-        from ..utils import read_protocol, resolve_checkpoint
+        from ..run import Run
 
         if not isinstance(self.source, str) or not self.source:
             raise ConfigError(
@@ -48,8 +48,8 @@ class FrameConfig(WorldModelConfig):
             )
         if isinstance(self.width, bool) or not isinstance(self.width, int) or self.width < 1:
             raise ConfigError(f"FrameConfig requires width to be a positive int, got {self.width!r}")
-        weights = resolve_checkpoint(self.source)
-        protocol = read_protocol(weights)
+        run = Run.open(self.source)
+        weights, protocol = run.weights, run.protocol.raw
         source_cfg = protocol.get("config") or {}
         if "embed_dim" not in source_cfg or "image_size" not in protocol:
             raise ConfigError(
@@ -95,7 +95,7 @@ class FrameConfig(WorldModelConfig):
 
     def prepare_model(self, model: Any) -> None:
         """Load the source run's weights into ``model.world_model`` (called by the trainer)."""
-        import torch
+        from ..utils import _read_weights
 
-        state = torch.load(self._source_weights, map_location="cpu", weights_only=True)
-        model.world_model.load_state_dict(state)
+        # checked as every load is: the sha256 the run recorded, no pickle, no NaN/inf
+        model.world_model.load_state_dict(_read_weights(self._source_weights, self._source_protocol))
