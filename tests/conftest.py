@@ -27,6 +27,18 @@ class Swm:
         return self.runner.invoke(app, list(args), input=input, prog_name="swm", **kwargs)
 
 
+@pytest.fixture(autouse=True)
+def _start_method():
+    """Opening a Lance dataset makes new processes spawn (lance is not fork-safe, see
+    stable_worldmodel.data.lance.fork_safe_workers): each test starts with the session's method."""
+    import multiprocessing as mp
+
+    before = mp.get_start_method(allow_none=True)
+    yield
+    if mp.get_start_method(allow_none=True) != before:
+        mp.set_start_method(before, force=True)
+
+
 @pytest.fixture
 def swm() -> Swm:
     return Swm()

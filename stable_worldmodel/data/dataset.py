@@ -382,9 +382,8 @@ class Dataset(_TorchDataset):
             return []
         transform = self.transform is not None
         batch = self._batch(indices, group_actions=not transform)  # a transform sees the raw action rows
-        items = [
-            dict(zip(batch, views, strict=False)) for views in zip(*(v.unbind(0) for v in batch.values()), strict=False)
-        ]
+        per_item = (v.unbind(0) if hasattr(v, "unbind") else v for v in batch.values())  # text columns: lists
+        items = [dict(zip(batch, views, strict=False)) for views in zip(*per_item, strict=False)]
         return [self._transformed(item) for item in items] if transform else items
 
     def load_episode(self, ep: int) -> dict[str, Any]:
@@ -473,13 +472,19 @@ class Dataset(_TorchDataset):
 
 def to_tensors(item: dict[str, np.ndarray], batch: bool = False, owned: bool = False) -> dict[str, Any]:
     """numpy columns -> torch tensors; images ``(T, H, W, C)`` -> ``(T, C, H, W)`` (with a
-    leading batch axis when ``batch``). The tensors never share memory with a reader's cache:
+    leading batch axis when ``batch``); a text column -> its first string (a list of them when
+    ``batch``). The tensors never share memory with a reader's cache:
     arrays are copied unless ``owned`` says they are fresh."""
     import torch
 
     out = {}
     for k, v in item.items():
         arr = np.asarray(v)
+        if arr.dtype.kind in "OUS":  # text (a Lance string column): a window gives its first value, as upstream
+            first = arr[:, 0] if batch else arr.reshape(-1)[:1]
+            values = [x.decode() if isinstance(x, bytes) else str(x) for x in first.tolist()]
+            out[k] = values if batch else (values[0] if values else "")
+            continue
         if image_like(arr[0] if batch else arr):
             arr = np.moveaxis(arr, -1, -3)
         out[k] = torch.from_numpy(np.ascontiguousarray(arr) if owned else np.array(arr, order="C"))

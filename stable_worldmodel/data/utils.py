@@ -183,14 +183,16 @@ def dataset_file(name: Any, cache_dir: str | os.PathLike | None = None, suffix: 
 
 def dataset_candidates(name: str, cache_dir: str | os.PathLike | None = None, suffix: str = ".h5") -> list[Path]:
     """Where a dataset named ``name`` may be in the cache folder, in the order they are tried:
-    ``<name><suffix>``, ``<name>/`` (a folder format, or shards), then both inside ``datasets/``
-    (where 0.1.1 keeps them). A name ending in a separator names only folders."""
+    ``<name><suffix>``, ``<name>.lance``, ``<name>/`` (a folder format, or shards), then the same
+    inside ``datasets/`` (where 0.1.1 keeps them). A name ending in a separator names only folders."""
     root = _root(cache_dir)
     text = _strip_seps(name) if _folder_like(name) else name
     found = []
     for base in (root, root / DATASETS_SUBFOLDER):
         if not _folder_like(name):
             found.append(base / f"{text}{suffix}")
+            if suffix == ".h5":
+                found.append(base / f"{text}.lance")
         found.append(base / text)
     return found
 
@@ -322,6 +324,8 @@ def convert(
     dest = Path(dest).expanduser()
     if fmt.name == "hdf5" and dest.suffix not in (".h5", ".hdf5"):
         dest = dest.with_name(dest.name + ".h5")
+    if fmt.name == "lance" and dest.suffix.lower() != ".lance":
+        dest = dest.with_name(dest.name + ".lance")
     columns = list(getattr(src, "stored_columns", None) or src.column_names)
     data = {col: np.asarray(src.get_col_data(col)) for col in columns}
     lengths, offsets = np.asarray(src.lengths, np.int64), np.asarray(src.offsets, np.int64)

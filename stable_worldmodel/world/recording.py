@@ -200,10 +200,9 @@ def collect(
     """Upstream 0.1.1's ``World.collect``: record ``episodes`` more episodes to ``path`` (or into ``writer``).
 
     ``format`` is a registered dataset format (:func:`stable_worldmodel.data.list_formats`);
-    by default it follows the path: ``.h5`` / ``.hdf5`` or a path without a suffix is HDF5 (the
-    file gets ``.h5``), a folder already holding a dataset keeps its format. (0.1.1's default,
-    Lance, is not bundled: ``format="lance"`` names the package to install.) Parent folders
-    are created. Appends to an existing dataset.
+    by default it follows the path: ``x.lance`` is Lance (0.1.1's default), ``.h5`` / ``.hdf5``
+    or a path without a suffix is HDF5 (the file gets ``.h5``), a folder already holding a
+    dataset keeps its format. Parent folders are created. Appends to an existing dataset.
     """
     from ..data.format import detect_format, get_format
     from .checks import check_seed
@@ -224,22 +223,7 @@ def collect(
         target = Path(path).expanduser()
         if format is None:
             known = detect_format(target) if target.exists() else None
-            format = known.name if known is not None else "hdf5"
-            if known is None and target.suffix == ".lance":
-                logger.warning(
-                    "%s: Lance is not bundled; writing HDF5 to %s.h5 (load_dataset(%r) finds it)",
-                    target,
-                    target,
-                    str(path),
-                )
-        if format == "lance":
-            from ..errors import DependencyNotInstalled
-
-            raise DependencyNotInstalled(
-                "World.collect(format='lance') requires a Lance writer, which stable-worldmodel does not ship; "
-                "record HDF5 instead (format='hdf5', the default) or another registered format: "
-                "stable_worldmodel.data.list_formats()"
-            )
+            format = known.name if known is not None else "lance" if target.suffix.lower() == ".lance" else "hdf5"
         fmt = get_format(format)
         if fmt.name == "hdf5" and target.suffix not in (".h5", ".hdf5"):
             target = target.with_name(target.name + ".h5")

@@ -129,7 +129,8 @@ def test_convert_copies_every_episode_to_another_format(tmp_path, make_h5):
 
 def test_one_lookup_of_datasets_by_name(make_h5, tmp_path):
     """load_dataset, dataset_info, HDF5Dataset(name), the trainer and delete_dataset find a name
-    in the same places, in the same order: ``<name>.h5``, ``<name>/``, then both in ``datasets/``."""
+    in the same places, in the same order: ``<name>.h5``, ``<name>.lance``, ``<name>/``, then the same
+    in ``datasets/``."""
     from stable_worldmodel.data.utils import convert, dataset_candidates, resolve_dataset, resolve_dataset_path
     from stable_worldmodel.errors import DatasetNotFoundError
 
@@ -137,8 +138,10 @@ def test_one_lookup_of_datasets_by_name(make_h5, tmp_path):
     source = make_h5((3, 4), name="src")
     assert [p.relative_to(home).as_posix() for p in dataset_candidates("x")] == [
         "x.h5",
+        "x.lance",
         "x",
         "datasets/x.h5",
+        "datasets/x.lance",
         "datasets/x",
     ]
     sub = data.get_cache_dir(sub_folder="datasets")
@@ -152,6 +155,9 @@ def test_one_lookup_of_datasets_by_name(make_h5, tmp_path):
     assert data.delete_dataset("x") == home / "x.h5" and data.delete_dataset("x") == sub / "x.h5"
     assert data.delete_dataset("x") == sub / "x" and not (sub / "x").exists()
     for call in (lambda: data.load_dataset("x"), lambda: data.dataset_info("x"), lambda: resolve_dataset("x")):
-        with pytest.raises(DatasetNotFoundError, match=r"looked for x\.h5, x, datasets/x\.h5, datasets/x\)") as err:
+        with pytest.raises(
+            DatasetNotFoundError,
+            match=r"looked for x\.h5, x\.lance, x, datasets/x\.h5, datasets/x\.lance, datasets/x\)",
+        ) as err:
             call()
         assert isinstance(err.value, FileNotFoundError) and isinstance(err.value, ValueError)  # 0.1.1 and 0.0.3

@@ -291,7 +291,8 @@ def test_unknown_dataset_lists_the_cached_ones(refused, toy):
     refused(
         FileNotFoundError,
         rf"Training requires an existing dataset, got 'tyo': it does not exist in .*"
-        rf"\(looked for tyo\.h5, tyo, datasets/tyo\.h5, datasets/tyo\)\. Did you mean '{toy}'\? Datasets there: {toy}$",
+        r"\(looked for tyo\.h5, tyo\.lance, tyo, datasets/tyo\.h5, datasets/tyo\.lance, datasets/tyo\)\. "
+        rf"Did you mean '{toy}'\? Datasets there: {toy}$",
         dataset="tyo",
     )
 
@@ -384,19 +385,19 @@ def test_a_diverging_run_stops_at_its_next_log(fit, monkeypatch):
         fit("dummy", "nan", steps=20, log_every=5)
 
 
-@pytest.mark.parametrize("fmt", ["folder", "video"])
+@pytest.mark.parametrize("fmt", ["folder", "video", "lance"])
 def test_trains_on_any_registered_format(fit, toy, _stablewm_home, fmt):
     """The trainer finds and opens datasets through the format registry: the toy recording
     converted to another format trains, on the same split and normalizers as the .h5 (its frames
     are JPEG there, so the losses are close, not equal)."""
     from stable_worldmodel.data.utils import convert
 
-    convert(toy, _stablewm_home / f"toy-{fmt}", dest_format=fmt, progress=False)
+    written = convert(toy, _stablewm_home / f"toy-{fmt}", dest_format=fmt, progress=False)
     (_stablewm_home / f"{toy}.h5").rename(_stablewm_home / "elsewhere.h5")  # only the converted copy is found
-    result = fit("lewm", f"from-{fmt}", dataset=f"toy-{fmt}", steps=10, log_every=5)
+    result = fit("lewm", f"from-{fmt}", dataset=f"toy-{fmt}", steps=10, log_every=5)  # toy-lance: toy-lance.lance
     assert result.steps == 10 and math.isfinite(result.train_loss)
     protocol = json.loads((result.folder / "protocol.json").read_text())
-    assert protocol["dataset"] == f"toy-{fmt}" and protocol["dataset_path"] == str(_stablewm_home / f"toy-{fmt}")
+    assert protocol["dataset"] == f"toy-{fmt}" and protocol["dataset_path"] == str(written)
     (_stablewm_home / "elsewhere.h5").rename(_stablewm_home / f"{toy}.h5")
     reference = fit("lewm", f"from-h5-{fmt}", steps=10, log_every=5)
     same = json.loads((reference.folder / "protocol.json").read_text())

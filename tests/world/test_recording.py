@@ -297,7 +297,6 @@ def test_evaluate_from_dataset_callables_read_their_arguments_from_the_start_row
 
 def test_collect_writes_any_registered_format_and_appends(tmp_path):
     from stable_worldmodel.data import load_dataset
-    from stable_worldmodel.errors import DependencyNotInstalled
 
     world = make_world(2)
     world.collect(tmp_path / "runs" / "toy", episodes=3, seed=0)  # no suffix: HDF5, parents created
@@ -309,8 +308,9 @@ def test_collect_writes_any_registered_format_and_appends(tmp_path):
     assert load_dataset(str(tmp_path / "folder")).num_episodes == 2
     with pytest.raises(ConfigError, match="exactly one of path= or writer="):
         world.collect(episodes=1)
-    with pytest.raises(DependencyNotInstalled, match="Lance"):
-        world.collect(tmp_path / "x.lance", episodes=1, format="lance")
+    world.collect(tmp_path / "x.lance", episodes=2, seed=0)  # .lance: upstream's default format
+    lance = load_dataset(str(tmp_path / "x.lance"))
+    assert type(lance).__name__ == "LanceDataset" and lance.num_episodes == 2 and not (tmp_path / "x.lance.h5").exists()
 
 
 def test_collect_into_a_writer_object(tmp_path):
