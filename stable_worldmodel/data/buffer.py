@@ -14,10 +14,10 @@ evicts whole episodes from the oldest end (FIFO) until it does. So the live rows
 contiguous stretch of the ring (modulo its length), and row ``r`` of the dataset (episodes
 concatenated, oldest first) lives at ring position ``(oldest + r) % max_steps``.
 
-Items are what every dataset kind gives (tensors, images ``(T, C, H, W)``, ``action`` and the
-other ``dense_columns`` grouped into ``(T, frameskip * ...)`` blocks, ``transform`` seeing the
-raw rows); :meth:`ReplayBuffer.sample` returns numpy arrays ``(B, T, ...)`` as stored (images
-``(B, T, H, W, C)``), untransformed, as upstream does.
+Items are upstream's: numpy arrays as stored (images ``(T, H, W, C)``; a DataLoader collates
+them into tensors), ``action`` and the other ``dense_columns`` grouped into ``(T, frameskip * ...)``
+blocks, then ``transform``; :meth:`ReplayBuffer.sample` returns the same ``(B, T, ...)``,
+untransformed.
 """
 
 from __future__ import annotations
@@ -70,7 +70,8 @@ class ReplayBuffer(Dataset):
         history_len: frames per window (``num_steps`` of the other datasets).
         frameskip: rows between two frames of a window.
         sampler: which windows :meth:`sample` draws (:data:`Sampler`; default :func:`uniform_sampler`).
-        transform: applied to each item (``buffer[i]``, the DataLoader path), not by :meth:`sample`.
+        transform: applied to each item (``buffer[i]``, the DataLoader path; it sees grouped
+            actions, as upstream's buffer), not by :meth:`sample`.
         key_filter: ``episode -> episode`` applied to every written episode (e.g. :func:`classic_filter`).
         dense_columns: columns read at every row and grouped, as ``action`` always is.
         seed: of :attr:`rng`, which the default sampler draws from.
@@ -201,6 +202,16 @@ class ReplayBuffer(Dataset):
     def _read_windows(self, col: str, starts: np.ndarray) -> np.ndarray:
         offsets = np.arange(0, self.span, self._row_step(col))
         return self._ring[col][(self._oldest + starts[:, None] + offsets) % self.max_steps]
+
+    def __getitem__(self, idx: int) -> dict[str, Any]:
+        """Window ``idx`` as upstream's buffer gives it: numpy arrays as stored (images
+        ``(T, H, W, C)``), dense columns grouped ``(T, frameskip * ...)``, then ``transform``."""
+        eps, steps = self._locate_many(np.asarray([idx], np.int64))  # IndexError out of range
+        start = self.offsets[eps] + steps
+        clip = {col: self._read_windows(col, start)[0] for col in self.keys_to_load}
+        for col in self.dense_columns.intersection(clip):
+            clip[col] = clip[col].reshape(self.num_steps, -1)
+        return self.transform(clip) if self.transform is not None else clip
 
     @property
     def num_steps_stored(self) -> int:

@@ -56,8 +56,7 @@ def test_fifo_eviction_of_whole_episodes_and_ring_wraparound():
         wide.write_episode(episode(ep, 3))
     windows = [(item["ep"].tolist(), item["step"].tolist()) for item in wide]
     assert windows == [([e, e], [s, s + 1]) for e in (22, 23, 24) for s in (0, 1)]
-    batch = wide.__getitems__([0, 5])
-    assert batch[1]["ep"].tolist() == [24, 24] and batch[1]["step"].tolist() == [1, 2]
+    assert wide[5]["ep"].tolist() == [24, 24] and wide[5]["step"].tolist() == [1, 2]
     drawn = wide.sample(50)
     assert set(drawn["ep"][:, 0].tolist()) == {22, 23, 24} and (drawn["ep"][:, 0] == drawn["ep"][:, 1]).all()
     assert (np.diff(drawn["step"], axis=1) == 1).all()
@@ -79,13 +78,18 @@ def test_windows_never_cross_episodes_and_follow_frameskip():
     assert seen == [(0, 0), (0, 1), (2, 0), (2, 1), (2, 2), (2, 3)]
 
 
-def test_items_in_a_dataloader_are_tensors_with_channels_first_images():
+def test_items_are_numpy_as_stored_and_collate_in_a_dataloader():
+    """As 0.1.1's buffer (observed): ``buf[i]`` is numpy, images (T, H, W, C) as stored."""
     buf = ReplayBuffer(max_steps=40, history_len=3)
     for ep in range(4):
         buf.write_episode(episode(ep, 6, image=True))
+    item = buf[0]
+    assert isinstance(item[keys.PIXELS], np.ndarray) and item[keys.PIXELS].shape == (3, 4, 4, 3)
     batch = next(iter(torch.utils.data.DataLoader(buf, batch_size=5, shuffle=False)))
-    assert batch[keys.PIXELS].shape == (5, 3, 3, 4, 4) and batch[keys.PIXELS].dtype == torch.uint8
+    assert batch[keys.PIXELS].shape == (5, 3, 4, 4, 3) and batch[keys.PIXELS].dtype == torch.uint8
     assert batch[keys.ACTION].shape == (5, 3, 2) and batch["ep"].shape == (5, 3)
+    with pytest.raises(IndexError):
+        buf[len(buf)]
     doubled = ReplayBuffer(max_steps=40, history_len=3, transform=lambda item: {**item, "ep": item["ep"] * 2})
     doubled.write_episode(episode(3, 6))
     assert doubled[0]["ep"].tolist() == [6, 6, 6]
