@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -141,3 +143,21 @@ def test_closing_one_renderer_leaves_the_other_intact(scene):
     with pytest.raises(RuntimeError, match="after close"):
         b.render(data, "c")
     a.close()
+
+
+@pytest.mark.parametrize("env_id", ["swm/OGBCube-v0", "swm/CheetahDMControl-v0"])
+def test_worker_processes_render_after_torch_was_imported(env_id):
+    """0.0.3's dmc/ogb docs import torch first, then run a World with worker processes: the
+    workers start clean (forkserver once torch is loaded) and render headless."""
+    code = _HEADLESS + (
+        "import torch, stable_worldmodel as swm\n"
+        "if __name__ == '__main__':\n"
+        f"    w = swm.World({env_id!r}, num_envs=2, image_shape=(16, 16), max_episode_steps=3, verbose=0,\n"
+        "                  vectorization_mode='async', render_quality='low')\n"
+        "    w.set_policy(swm.policy.RandomPolicy(seed=0)); w.reset(seed=0); w.step()\n"
+        "    print(w.envs.mode, w.infos['pixels'].shape, int(w.infos['pixels'].std() > 0)); w.close()\n"
+    )
+    script = Path(tempfile.mkdtemp()) / "user_script.py"
+    script.write_text(code)
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=240)
+    assert out.stdout.split() == ["async", "(2,", "1,", "16,", "16,", "3)", "1"], out.stderr[-2000:]
