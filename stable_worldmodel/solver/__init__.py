@@ -34,11 +34,14 @@ def __dir__() -> list[str]:
 
 if TYPE_CHECKING:  # pragma: no cover
     from .base import AUTO_BATCH, BaseSolver  # noqa: F401
+    from .categorical_cem import CategoricalCEMSolver  # noqa: F401
     from .cem import CEMSolver  # noqa: F401
     from .discrete_solvers import PGDSolver  # noqa: F401
     from .gd import GDSolver, GradientSolver  # noqa: F401
     from .icem import ICEMSolver  # noqa: F401
+    from .lagrangian import LagrangianSolver  # noqa: F401
     from .mppi import MPPISolver  # noqa: F401
     from .nevergrad import NevergradSolver  # noqa: F401
+    from .predictive_sampling import PredictiveSamplingSolver  # noqa: F401
     from .random import RandomSolver  # noqa: F401
     from .solver import Costable, Solver  # noqa: F401

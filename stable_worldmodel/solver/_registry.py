@@ -24,6 +24,9 @@ BUILTIN: dict[str, str] = {
     "pgd": f"{_P}.discrete_solvers:PGDSolver",
     "random": f"{_P}.random:RandomSolver",
     "nevergrad": f"{_P}.nevergrad:NevergradSolver",
+    "predictive_sampling": f"{_P}.predictive_sampling:PredictiveSamplingSolver",
+    "lagrangian": f"{_P}.lagrangian:LagrangianSolver",
+    "categorical_cem": f"{_P}.categorical_cem:CategoricalCEMSolver",
 }
 _ENTRIES: dict[str, Any] = dict(BUILTIN)
 

@@ -119,6 +119,8 @@ class BaseSolver:
         seed: int = 1234,
         n_steps: int = 1,
         topk: int | None = None,
+        *,
+        callbacks: Any = None,
     ):
         if not callable(getattr(model, "get_cost", None)):
             raise ConfigError(f"{type(self).__name__} requires a model with get_cost(info, candidates), got {model!r}")
@@ -142,6 +144,32 @@ class BaseSolver:
         self._draw = 0
         self._row_starts: tuple = (None, None)
         self._solve_seed = 0
+        self.callbacks = self._check_callbacks(callbacks)
+
+    # -- callbacks (stable_worldmodel.solver.callbacks) ---------------------------------------
+    def _check_callbacks(self, callbacks: Any) -> list:
+        if callbacks is None:
+            return []
+        items = list(callbacks) if isinstance(callbacks, (list, tuple)) else None
+        bad = (
+            [callbacks]
+            if items is None
+            else [c for c in items if not (callable(c) and all(hasattr(c, m) for m in ("reset", "start_batch")))]
+        )
+        if bad:
+            raise ConfigError(
+                f"{type(self).__name__} requires callbacks to be a list of stable_worldmodel.solver.callbacks.Callback "
+                f"instances, got {bad[0]!r}"
+            )
+        return items
+
+    def _notify(self, **state: Any) -> bool:
+        """Call every callback with the iteration's state; True when one asks to stop."""
+        stop = False
+        for cb in self.callbacks:
+            cb(**state)
+            stop = stop or bool(getattr(cb, "stop", False))
+        return stop
 
     # -- validation helpers (constructors of every solver) --------------------------------
     def _check_positive(self, **values: Any) -> None:
@@ -330,6 +358,8 @@ class BaseSolver:
         init = self._pad_init(init_action)
         self._solve_seed = int(self._seed_rng.integers(0, 2**62))
         while True:
+            for cb in self.callbacks:
+                cb.reset()
             try:
                 parts = [self._optimize_rows(info, init, start, stop) for start, stop in self._chunks()]
                 break
@@ -345,10 +375,17 @@ class BaseSolver:
         for key in parts[0]:
             values = [part[key] for part in parts]
             out[key] = torch.cat(values).cpu() if torch.is_tensor(values[0]) else values
+        if self.callbacks:
+            out["callbacks"] = {}
+            for cb in self.callbacks:
+                cb.end_solve()
+                out["callbacks"][cb.output_key] = cb.history
         return out
 
     def _optimize_rows(self, info: dict, init: torch.Tensor | None, start: int, stop: int) -> dict:
         self._rows, self._draw = (start, stop), 0
+        for cb in self.callbacks:
+            cb.start_batch()
         rows = {key: self._slice(value, start, stop) for key, value in info.items()}
         sub_init = None if init is None else init[start:stop]
         if not self._inference_mode:

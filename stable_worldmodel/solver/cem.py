@@ -54,12 +54,26 @@ class CEMSolver(GaussianStart, BaseSolver):
         topk: int = 30,
         device: str | torch.device | None = "cpu",
         seed: int = 1234,
+        callbacks: list | None = None,
     ) -> None:
-        super().__init__(model, batch_size, num_samples, var_scale, device, seed, n_steps, topk)
+        super().__init__(model, batch_size, num_samples, var_scale, device, seed, n_steps, topk, callbacks=callbacks)
 
     def _optimize(self, info: dict, init_action: torch.Tensor | None) -> dict:
         mean, std, info_s = self._gaussian_start(info, init_action)
-        for _ in range(self.n_steps):
-            elite_costs, elites = self._sample_elites(info_s, mean, std, self.topk)
+        for step in range(self.n_steps):
+            if not self.callbacks:
+                elite_costs, elites = self._sample_elites(info_s, mean, std, self.topk)
+                mean, std = self._mean_std(elites)
+                continue
+            candidates = self._sample_around(mean, std, self.num_samples)
+            costs = self._cost(info_s, candidates)
+            elite_costs, elites = self._elites(candidates, costs, self.topk)
+            prev_mean, prev_var = mean, std
             mean, std = self._mean_std(elites)
+            state = dict(candidates=candidates, costs=costs, topk_vals=elite_costs, topk_candidates=elites)
+            topk_inds = costs.topk(self.topk, dim=1, largest=False).indices
+            if self._notify(
+                step=step, **state, topk_inds=topk_inds, mean=mean, var=std, prev_mean=prev_mean, prev_var=prev_var
+            ):
+                break
         return {"actions": mean, "costs": elite_costs[:, 0], "mean": mean, "var": std}

@@ -27,8 +27,45 @@ def project_simplex(v: torch.Tensor) -> torch.Tensor:
     return (v - theta).clamp_min(0)
 
 
+class DiscreteActions:
+    """Mixin of the discrete solvers (:class:`PGDSolver`, ``CategoricalCEMSolver``): the action
+    space is a single ``Discrete(n)`` (batched here to ``MultiDiscrete([n] * n_envs)``) or the
+    batched ``MultiDiscrete`` of B envs of ``Discrete(n)`` / of a ``MultiDiscrete`` with equal
+    ``nvec``; candidates are one-hot (or simplex) points ``(B, S, H, A * n)``."""
+
+    #: plans discrete actions only (a Box env needs another solver)
+    discrete_actions = True
+
+    def configure(self, *, action_space: gym.Space, n_envs: int, config: Any) -> None:
+        """Like :meth:`BaseSolver.configure`; a single ``Discrete(n)`` is batched to ``n_envs`` envs."""
+        if isinstance(action_space, gym.spaces.Discrete):
+            self._check_positive(n_envs=n_envs)
+            action_space = batch_space(action_space, int(n_envs))
+        super().configure(action_space=action_space, n_envs=n_envs, config=config)
+
+    def _check_space(self, action_space: gym.Space) -> None:
+        nvec = np.asarray(getattr(action_space, "nvec", []))
+        if not isinstance(action_space, gym.spaces.MultiDiscrete) or nvec.size == 0 or (nvec != nvec.flat[0]).any():
+            raise SpaceError(
+                f"{type(self).__name__} requires a discrete action space (Action space must be discrete): "
+                f"Discrete(n), or the batched MultiDiscrete with equal nvec, got {action_space!r}"
+            )
+        if (np.asarray(action_space.start) != 0).any():
+            raise SpaceError(f"{type(self).__name__} requires actions starting at 0, got start={action_space.start}")
+
+    @property
+    def n_choices(self) -> int | None:
+        """Choices per discrete action (n); None before :meth:`configure`."""
+        return None if self._space is None else int(np.asarray(self._space.nvec).flat[0])
+
+    @property
+    def action_simplex_dim(self) -> int | None:
+        """Width of the relaxed candidates given to ``get_cost``: ``action_dim * n``."""
+        return None if self._space is None else self.action_dim * self.n_choices
+
+
 @register_solver("pgd")
-class PGDSolver(GradientSolver):
+class PGDSolver(DiscreteActions, GradientSolver):
     """Projected gradient descent on the simplex relaxation of discrete actions.
 
     The action space is a single ``Discrete(n)`` (seed 000's form, batched here to
@@ -50,33 +87,6 @@ class PGDSolver(GradientSolver):
     knobs = PlanKnobs(
         samples=None, fixed=(("num_samples", 1),), summary="projected gradient descent (discrete actions)"
     )
-
-    def configure(self, *, action_space: gym.Space, n_envs: int, config: Any) -> None:
-        """Like :meth:`BaseSolver.configure`; a single ``Discrete(n)`` is batched to ``n_envs`` envs."""
-        if isinstance(action_space, gym.spaces.Discrete):
-            self._check_positive(n_envs=n_envs)
-            action_space = batch_space(action_space, int(n_envs))
-        super().configure(action_space=action_space, n_envs=n_envs, config=config)
-
-    def _check_space(self, action_space: gym.Space) -> None:
-        nvec = np.asarray(getattr(action_space, "nvec", []))
-        if not isinstance(action_space, gym.spaces.MultiDiscrete) or nvec.size == 0 or (nvec != nvec.flat[0]).any():
-            raise SpaceError(
-                "PGDSolver requires a discrete action space (Action space must be discrete): Discrete(n), or the "
-                f"batched MultiDiscrete with equal nvec, got {action_space!r}"
-            )
-        if (np.asarray(action_space.start) != 0).any():
-            raise SpaceError(f"PGDSolver requires actions starting at 0, got start={action_space.start}")
-
-    @property
-    def n_choices(self) -> int | None:
-        """Choices per discrete action (n); None before :meth:`configure`."""
-        return None if self._space is None else int(np.asarray(self._space.nvec).flat[0])
-
-    @property
-    def action_simplex_dim(self) -> int | None:
-        """Width of the relaxed candidates given to ``get_cost``: ``action_dim * n``."""
-        return None if self._space is None else self.action_dim * self.n_choices
 
     # -- warm start --------------------------------------------------------------------------
     def solve(self, info_dict: dict, init_action: Any = None, from_scalar: bool = False) -> dict:

@@ -25,6 +25,8 @@ class GradientSolver(BaseSolver):
     ``optimizer_kwargs`` default to ``{"lr": 0.1}``; ``batch_size=None`` plans all envs in
     one pass. Returns ``actions: (B, H, A)`` and ``costs: (B,)``. :meth:`init_action` draws
     the starting plans of the next solve into :attr:`init` (``var_scale=0``: no noise).
+    ``grad_clip``: clip the gradient's norm before each step (upstream 0.1.1); ``callbacks`` as in
+    :mod:`.callbacks` (state: ``params``, ``cost``, ``costs``).
     """
 
     #: starting plans ``(B, S, H, A)`` drawn by the last :meth:`init_action` call (None before)
@@ -43,8 +45,13 @@ class GradientSolver(BaseSolver):
         seed: int = 1234,
         optimizer_cls: type[torch.optim.Optimizer] = torch.optim.SGD,
         optimizer_kwargs: dict | None = None,
+        grad_clip: float | None = None,
+        callbacks: list | None = None,
     ) -> None:
-        super().__init__(model, batch_size, num_samples, var_scale, device, seed, n_steps)
+        super().__init__(model, batch_size, num_samples, var_scale, device, seed, n_steps, callbacks=callbacks)
+        self.grad_clip = (
+            None if grad_clip is None else self._check_number("grad_clip", grad_clip, minimum=0.0, strict=True)
+        )
         self.action_noise = self._check_number("action_noise", action_noise, minimum=0.0)
         if not callable(optimizer_cls):
             raise ConfigError(
@@ -103,15 +110,29 @@ class GradientSolver(BaseSolver):
         """Candidates for final plans, to score them (here: the plans themselves)."""
         return plans
 
+    def _loss(self, info_s: dict, x: torch.Tensor, costs: torch.Tensor) -> torch.Tensor:
+        """What a step descends (here: the summed costs; the Lagrangian adds constraint terms)."""
+        return costs.sum()
+
     # -- the algorithm ---------------------------------------------------------------------
     def _optimize(self, info: dict, init_action: torch.Tensor | None) -> dict:
         info_s = self._expand(info, self.num_samples)
         with torch.no_grad():
             x = self._init_variable(init_action)
-        x.requires_grad_(True)
+        x = self._descend(info_s, x)
+        with torch.no_grad():
+            plans = self._decode(x)
+            costs = self._cost(info_s, self._encode(plans))
+            cost, idx = costs.min(dim=1)
+            best = plans[torch.arange(plans.shape[0], device=plans.device), idx]
+        return {"actions": best, "costs": cost}
+
+    def _descend(self, info_s: dict, x: torch.Tensor) -> torch.Tensor:
+        """``n_steps`` steps of a fresh optimizer on :meth:`_loss` from ``x``; the variable after them."""
+        x = x.detach().requires_grad_(True)
         optimizer = self.optimizer_cls([x], **self.optimizer_kwargs)
         with torch.enable_grad():
-            for _ in range(self.n_steps):
+            for step in range(self.n_steps):
                 costs = self._cost(info_s, self._candidates(x))
                 if not costs.requires_grad:
                     raise ConfigError(
@@ -119,18 +140,19 @@ class GradientSolver(BaseSolver):
                         f"(Cost must requires_grad for {self.name.upper()} solver), got costs without a graph; "
                         "do not call it under torch.no_grad() or detach the candidates, or use a sampling solver (cem)"
                     )
-                (x.grad,) = torch.autograd.grad(costs.sum(), [x])
+                loss = self._loss(info_s, x, costs)
+                (x.grad,) = torch.autograd.grad(loss, [x])
+                stop = self.callbacks and self._notify(step=step, params=x, cost=loss.detach(), costs=costs.detach())
+                if self.grad_clip is not None:
+                    torch.nn.utils.clip_grad_norm_([x], self.grad_clip)
                 optimizer.step()
                 with torch.no_grad():
                     if self.action_noise > 0:
                         x.add_(self.action_noise * self._randn(*x.shape[1:]))
                     x.copy_(self._project(x))
-        with torch.no_grad():
-            plans = self._decode(x.detach())
-            costs = self._cost(info_s, self._encode(plans))
-            cost, idx = costs.min(dim=1)
-            best = plans[torch.arange(plans.shape[0], device=plans.device), idx]
-        return {"actions": best, "costs": cost}
+                if stop:
+                    break
+        return x.detach()
 
 
 GDSolver = GradientSolver

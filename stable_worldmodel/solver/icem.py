@@ -6,6 +6,7 @@ from typing import Any
 
 import torch
 
+from ..errors import check_int
 from ._registry import register_solver
 from ._start import GaussianStart
 from .base import AUTO_BATCH, BaseSolver, PlanKnobs
@@ -46,7 +47,9 @@ class ICEMSolver(GaussianStart, BaseSolver):
     the horizon (power spectrum ``1 / f**noise_beta``: smoother plans), a fraction
     ``elite_keep_frac`` of the elites is carried into the next iteration's candidates,
     mean/std are updated with ``momentum`` (``new = momentum * old + (1 - momentum) * fit``),
-    and the cheapest plan ever evaluated is returned. ``batch_size`` as in CEM.
+    and the cheapest plan ever evaluated is returned (the final mean with ``return_mean=True``).
+    Upstream 0.1.1's ``alpha`` (the momentum) and ``n_elite_keep`` (a count of kept elites) are
+    accepted too. ``batch_size`` as in CEM; ``callbacks`` as in :mod:`.callbacks`.
     Returns ``actions: (B, H, A)``, ``costs: (B,)``, ``mean``, ``var`` (std).
     """
 
@@ -67,13 +70,23 @@ class ICEMSolver(GaussianStart, BaseSolver):
         momentum: float = 0.1,
         device: str | torch.device | None = "cpu",
         seed: int = 1234,
+        callbacks: list | None = None,
+        *,
+        alpha: float | None = None,
+        n_elite_keep: int | None = None,
+        return_mean: bool = False,
     ) -> None:
-        super().__init__(model, batch_size, num_samples, var_scale, device, seed, n_steps, topk)
+        super().__init__(model, batch_size, num_samples, var_scale, device, seed, n_steps, topk, callbacks=callbacks)
         elite_keep_frac = self._check_number("elite_keep_frac", elite_keep_frac, minimum=0.0, maximum=1.0)
-        momentum = self._check_number("momentum", momentum, minimum=0.0, maximum=1.0)
+        if alpha is not None:  # upstream 0.1.1's name of the momentum
+            momentum = alpha
+        momentum = self._check_number("momentum" if alpha is None else "alpha", momentum, minimum=0.0, maximum=1.0)
         self.noise_beta = self._check_number("noise_beta", noise_beta, minimum=0.0)
         self.momentum = momentum
         self.n_keep = int(elite_keep_frac * self.topk)
+        if n_elite_keep is not None:  # upstream 0.1.1: a count of elites instead of a fraction
+            self.n_keep = min(check_int(type(self).__name__, "n_elite_keep", n_elite_keep, minimum=0), self.topk)
+        self.return_mean = bool(return_mean)
 
     def _optimize(self, info: dict, init_action: torch.Tensor | None) -> dict:
         mean = self._initial_mean(init_action)
@@ -85,7 +98,7 @@ class ICEMSolver(GaussianStart, BaseSolver):
         info_all = self._expand(info, s + self.n_keep)
         kept = None
         best, best_cost = mean, torch.full((b,), float("inf"), device=self.device, dtype=self.dtype)
-        for _ in range(self.n_steps):
+        for step in range(self.n_steps):
             white = self._randn(s, a, h)  # colored along H, then laid out (b, S, H, A)
             noise = (white if color is None else torch.matmul(white, color)).transpose(-1, -2)
             noise[:, 0].zero_()  # candidate 0 is the mean
@@ -101,6 +114,14 @@ class ICEMSolver(GaussianStart, BaseSolver):
             best_cost = torch.minimum(elite_costs[:, 0], best_cost)
             kept = elites[:, : self.n_keep] if self.n_keep else None
             fit_mean, fit_std = self._mean_std(elites)
+            prev_mean, prev_var = mean, std
             mean = torch.lerp(fit_mean, mean, self.momentum)
             std = torch.lerp(fit_std, std, self.momentum)
-        return {"actions": best, "costs": best_cost, "mean": mean, "var": std}
+            if self.callbacks:
+                topk_inds = costs.topk(self.topk, dim=1, largest=False).indices
+                state = dict(candidates=candidates, costs=costs, topk_vals=elite_costs, topk_candidates=elites)
+                if self._notify(
+                    step=step, **state, topk_inds=topk_inds, mean=mean, var=std, prev_mean=prev_mean, prev_var=prev_var
+                ):
+                    break
+        return {"actions": mean if self.return_mean else best, "costs": best_cost, "mean": mean, "var": std}

@@ -26,12 +26,12 @@ def test_knobs_map_plan_settings_to_constructor_arguments():
     assert PlanKnobs(iterations=None).kwargs(100, 7, None) == {"num_samples": 100}
 
 
-@pytest.mark.parametrize("name", ["cem", "icem", "mppi", "gd", "random", "nevergrad", "pgd"])
+@pytest.mark.parametrize("name", list_solvers())
 def test_every_registered_solver_is_a_plan_choice_built_from_its_knobs(name):
     settings = PlanSettings(solver=name, samples=20, iterations=3)
     solver = _make_solver(_Cost(), settings, "cpu")
     assert type(solver).name == name and solver.n_steps == (1 if name == "random" else 3)
-    assert solver.num_samples == (1 if name in ("gd", "pgd") else 20)
+    assert solver.num_samples == (1 if name in ("gd", "pgd", "lagrangian") else 20)
     assert type(solver).__name__ in solver_pkg.__all__  # exported by the package, from the registry's table
 
 
