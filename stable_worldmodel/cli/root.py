@@ -125,6 +125,7 @@ def common(
 
 
 def _register() -> None:
+    from .data_cmds import convert_cmd, preview_cmd
     from .demo import demo
     from .pipeline import collect, envs, eval_cmd, fovs, sweep
     from .resources import checkpoints_cmd, datasets_cmd, delete, inspect_cmd, list_cmd, show
@@ -144,6 +145,9 @@ def _register() -> None:
     app.command("datasets")(datasets_cmd)
     app.command("inspect")(inspect_cmd)
     app.command("checkpoints")(checkpoints_cmd)
+    app.command("convert")(convert_cmd)
+    # upstream's main
+    app.command("preview")(preview_cmd)
 
 
 _register()

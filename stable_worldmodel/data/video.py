@@ -15,7 +15,7 @@ from ..errors import ConfigError, UnknownNameError
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["write_mp4", "hstack_frames", "vstack_frames", "record_video_from_dataset"]
+__all__ = ["write_mp4", "hstack_frames", "vstack_frames", "record_video_from_dataset", "preview_dataset"]
 
 
 def _even(frame: np.ndarray) -> np.ndarray:
@@ -123,3 +123,49 @@ def record_video_from_dataset(
         )
         out.append(write_mp4(Path(video_path) / f"episode_{ep}.mp4", rows, fps=fps))
     return out
+
+
+def preview_dataset(
+    name: str | os.PathLike,
+    *,
+    episodes: Sequence[int] | None = None,
+    n: int = 4,
+    out: str | os.PathLike | None = None,
+    fps: int = 10,
+    seed: int = 0,
+    cache_dir: str | os.PathLike | None = None,
+) -> list[Path]:
+    """One MP4 per episode of dataset ``name`` (any registered format): every image column side by
+    side (``pixels``, other views, ``goal`` below), for a first look (``swm preview``).
+
+    ``episodes``: which ones (default: ``n`` drawn with ``seed``, in order). ``out``: the folder
+    (default ``<cache>/previews/<dataset>/``). Returns the paths written.
+    """
+    from ..errors import check_int
+    from .utils import get_cache_dir, load_dataset, resolve_dataset
+    from .writer import is_image_column
+
+    path = resolve_dataset(name, cache_dir, who="preview")
+    dataset = load_dataset(path)
+    try:
+        columns = list(dataset.column_names)
+        views = [c for c in columns if c != keys.GOAL and is_image_column(*dataset.column_shape(c))]
+        if not views:
+            raise ConfigError(
+                f"preview requires a dataset with image columns, got {str(path)!r} with columns {columns}"
+            )
+        total = int(dataset.num_episodes)
+        if episodes is None:
+            count = min(check_int("preview", "n", n), total)
+            chosen = sorted(np.random.default_rng(seed).choice(total, size=count, replace=False).tolist())
+        else:
+            chosen = [int(e) for e in episodes]
+            bad = [e for e in chosen if not 0 <= e < total]
+            if bad:
+                raise ConfigError(f"preview requires episodes in [0, {total}) of {path.name}, got {bad}")
+        folder = Path(out) if out is not None else get_cache_dir() / "previews" / path.stem
+        return record_video_from_dataset(folder, dataset, chosen, fps=fps, viewname=views)
+    finally:
+        close = getattr(dataset, "close", None)
+        if close is not None:
+            close()
