@@ -289,3 +289,25 @@ def test_failed_rejection_sampling_keeps_the_0_0_3_phrase():
         space.sample(max_tries=3)
     with pytest.raises(RuntimeError, match="constrain_fn not satisfied after 4 draws"):
         Discrete(3, constrain_fn=lambda x: False).sample(max_tries=4)
+
+
+def test_dict_sampling_order_private_names_of_the_releases():
+    """0.0.3 / 0.1.1 research code reads ``_sampling_order`` (top-level keys) and walks
+    ``_get_sampling_order(parts)`` (dotted paths); setting ``_sampling_order`` reorders sampling."""
+    from stable_worldmodel import spaces as swm_spaces
+    from stable_worldmodel.errors import SpaceError
+
+    d = swm_spaces.Dict(
+        {
+            "a": swm_spaces.Discrete(3),
+            "g": swm_spaces.Dict({"w": swm_spaces.Discrete(4), "h": swm_spaces.Discrete(5)}),
+            "b": swm_spaces.Discrete(2),
+        }
+    )
+    assert d._sampling_order == ["a", "g", "b"]
+    assert list(d._get_sampling_order()) == ["a", "g", "g.w", "g.h", "b"] == d.sampling_order
+    assert list(d._get_sampling_order(("env",)))[:2] == ["env.a", "env.g"]
+    d._sampling_order = ["g"]  # missing keys appended, in their order
+    assert d._sampling_order == ["g", "a", "b"] and d.sampling_order[0] == "g"
+    with pytest.raises(SpaceError, match="'zz'"):
+        d._sampling_order = ["zz"]

@@ -162,6 +162,25 @@ class Dict(gym.spaces.Dict):
     def sampling_order(self, order: Iterable[str]) -> None:
         apply_sampling_order(self, order)
 
+    @property
+    def _sampling_order(self) -> list[str]:
+        """The top-level keys in sampling order: the releases' private attribute, which research
+        code reads and sets (setting it: unknown keys refused, missing keys appended)."""
+        return list(self._order)
+
+    @_sampling_order.setter
+    def _sampling_order(self, keys: Iterable[str]) -> None:
+        keys = list(keys)
+        unknown = [k for k in keys if k not in self.spaces]
+        if unknown:
+            raise self._unknown("_sampling_order keys", unknown[0])
+        self._order = keys + [k for k in self.spaces if k not in keys]
+
+    def _get_sampling_order(self, parts: tuple[str, ...] | None = None) -> Iterator[str]:
+        """Dotted paths in sampling order, each prefixed by ``parts`` (the releases' generator behind
+        :attr:`sampling_order`)."""
+        yield from self._ordered_paths("".join(f"{p}." for p in parts or ()))
+
     def _ordered_paths(self, prefix: str = "") -> Iterator[str]:
         for key in self._order:
             yield prefix + key
