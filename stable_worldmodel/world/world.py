@@ -455,3 +455,29 @@ def _set_array_rows(current, ids, value, n):
     out = current.copy()
     out[ids] = value
     return out
+
+
+def _apply_callables(env: Any, callables: Sequence[Any], init_state: dict) -> None:
+    """Call ``env.<method>(**args)`` for each spec of ``callables`` on one env (upstream 0.1.1's
+    private helper, which research code calls directly; the World itself goes through
+    :func:`~stable_worldmodel.world.recording._apply_callables`, batched over its envs).
+
+    A spec is ``{"method": name, "args": {arg: {"value": key, "in_dataset": True}}}``: an
+    ``in_dataset`` argument is a copy of ``init_state[key]`` (left out when the key is missing),
+    otherwise ``value`` itself. A method ``env`` lacks is skipped, as upstream's.
+    """
+    from copy import deepcopy
+
+    for spec in callables or ():
+        method = spec["method"]
+        if not hasattr(env, method):
+            continue
+        kwargs = {}
+        for arg, data in spec.get("args", {}).items():
+            if data.get("in_dataset", True):
+                key = data.get("value")
+                if key in init_state:
+                    kwargs[arg] = deepcopy(init_state[key])
+            else:
+                kwargs[arg] = data.get("value")
+        getattr(env, method)(**kwargs)

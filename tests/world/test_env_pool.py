@@ -77,3 +77,25 @@ def test_bad_arguments_are_typed_errors():
         p.reset(mask=[True, False, True])
     with pytest.raises(ConfigError, match="one seed per env \\(3\\), got 2"):
         p.reset(seed=[1, 2])
+
+
+def test_apply_callables_of_011_on_one_env():
+    """``stable_worldmodel.world.world._apply_callables(env, callables, init_state)`` as 0.1.1's."""
+    from stable_worldmodel.world.world import _apply_callables
+
+    class Env:
+        def __init__(self):
+            self.calls = []
+
+        def set_state(self, pos=None, speed=None):
+            self.calls.append((pos, speed))
+
+    env, state = Env(), {"state": np.array([1.0, 2.0])}
+    specs = [
+        {"method": "set_state", "args": {"pos": {"value": "state"}, "speed": {"value": 3, "in_dataset": False}}},
+        {"method": "missing_method", "args": {}},  # skipped
+        {"method": "set_state", "args": {"pos": {"value": "not_in_state"}}},  # the argument is left out
+    ]
+    _apply_callables(env, specs, state)
+    assert env.calls[0][0].tolist() == [1.0, 2.0] and env.calls[0][1] == 3 and env.calls[1] == (None, None)
+    assert env.calls[0][0] is not state["state"]  # a copy
