@@ -53,8 +53,11 @@ def vstack_frames(frames: Sequence[np.ndarray]) -> np.ndarray:
     return np.concatenate([np.pad(f, ((0, 0), (0, w - f.shape[1]), (0, 0))) for f in frames], axis=0)
 
 
-def write_mp4(path: str | os.PathLike, frames: Iterable[np.ndarray], fps: int = 30, quality: float = 5) -> Path:
-    """Write ``frames`` (each ``(H, W, 3)`` uint8, same size) as an H.264 MP4 at ``path``.
+def write_mp4(
+    path: str | os.PathLike, frames: Iterable[np.ndarray], fps: int = 30, quality: float = 5, codec: str = "libx264"
+) -> Path:
+    """Write ``frames`` (each ``(H, W, 3)`` uint8, same size) as an MP4 at ``path`` (``codec``: an
+    ffmpeg encoder, H.264 by default).
 
     ``quality`` goes from 0 (smallest) to 10 (nearly lossless).
     """
@@ -65,7 +68,7 @@ def write_mp4(path: str | os.PathLike, frames: Iterable[np.ndarray], fps: int = 
     writer = imageio.get_writer(
         str(path),
         fps=fps,
-        codec="libx264",
+        codec=codec,
         quality=quality,
         pixelformat="yuv420p",
         macro_block_size=1,

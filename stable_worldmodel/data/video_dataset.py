@@ -102,18 +102,33 @@ class VideoDataset(FolderDataset):
 
 class VideoWriter(FolderWriter):
     """:class:`FolderWriter` that stores each media column of an episode as ``<key>/ep_{e}.mp4``
-    (H.264, ``fps``; odd frame sizes are padded and ``<key>/frames.json`` records the true one)."""
+    (``codec``, default H.264, at ``fps``; odd frame sizes are padded and ``<key>/frames.json``
+    records the true one). Upstream 0.1.1's signature: ``VideoWriter(path, fps=25, codec="libx264",
+    *, mode="append")``; ``quality`` (0-10) is ours."""
 
-    def __init__(self, path: str | os.PathLike, *, mode: str = "append", fps: int = 30, quality: int = 10):
+    def __init__(
+        self,
+        path: str | os.PathLike,
+        fps: int = 25,
+        codec: str = "libx264",
+        *,
+        mode: str = "append",
+        quality: int = 10,
+    ):
         if isinstance(fps, bool) or not isinstance(fps, (int, float)) or fps <= 0:
             raise ConfigError(f"VideoWriter requires fps > 0, got {fps!r}")
         if not 0 <= quality <= 10:
             raise ConfigError(f"VideoWriter requires 0 <= quality <= 10, got {quality!r}")
+        if not isinstance(codec, str) or not codec:
+            raise ConfigError(
+                f"VideoWriter requires codec to be an ffmpeg encoder name such as 'libx264', got {codec!r}"
+            )
         super().__init__(path, mode=mode)
-        self.fps, self.video_quality = fps, quality
+        self.fps, self.codec, self.video_quality = fps, codec, quality
 
     def _write_media(self, col: str, ep: int, frames: np.ndarray) -> None:
-        write_mp4(self.path / col / f"ep_{ep}.mp4", frames, fps=self.fps, quality=self.video_quality)
+        path = self.path / col / f"ep_{ep}.mp4"
+        write_mp4(path, frames, fps=self.fps, quality=self.video_quality, codec=self.codec)
         h, w, c = frames.shape[1:]
         sidecar = self.path / col / FRAMES_FILE
         if h % 2 or w % 2 or c == 1:  # what the decoded frames do not say

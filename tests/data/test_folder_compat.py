@@ -195,3 +195,16 @@ def test_conversion_from_hdf5_round_trips(make_h5, tmp_path):
     np.testing.assert_array_equal(ds[4][keys.STATE].numpy(), h5[4][keys.STATE].numpy())
     with pytest.raises(FileExistsError):
         data.write_folder_dataset(h5, tmp_path / "f")
+
+
+def test_video_writer_takes_011_positional_fps_and_codec(tmp_path):
+    """0.1.1: ``VideoWriter(path, fps=25, codec="libx264", *, mode="append")``."""
+    av = pytest.importorskip("av")
+    with VideoWriter(tmp_path / "v", 12, "mpeg4") as writer:
+        writer.write_episodes([episode(0, 3, image=(16, 16), key="video")])
+    with av.open(str(tmp_path / "v" / "video" / "ep_0.mp4")) as container:
+        stream = container.streams.video[0]
+        assert stream.codec_context.name == "mpeg4" and float(stream.average_rate) == 12
+    assert VideoWriter(tmp_path / "w").fps == 25  # 0.1.1's default
+    with pytest.raises(ConfigError, match="codec"):
+        VideoWriter(tmp_path / "x", 10, "")
