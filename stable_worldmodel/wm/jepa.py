@@ -81,6 +81,13 @@ class JEPA(nn.Module):
         self.extra_config = dict(kwargs)
         self.goal_cost = "final"  # see GOAL_COSTS; set by planning, not saved
 
+    def __setstate__(self, state: dict) -> None:
+        """A model that upstream 0.1.1 pickled (``*_object.ckpt``) lacks our plain attributes:
+        they get their defaults (its sub-modules' own ``__setstate__`` fill theirs)."""
+        super().__setstate__(state)
+        self.__dict__.setdefault("extra_config", {})
+        self.__dict__.setdefault("goal_cost", "final")
+
     # -- sizes --------------------------------------------------------------------------------
     @property
     def history_size(self) -> int:

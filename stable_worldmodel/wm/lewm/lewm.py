@@ -49,6 +49,15 @@ class LeWM(JEPA):
         # kept out of the module tree: its buffers must not enter the state dict (upstream's has none)
         self._sigreg = {"module": SIGReg(knots=sigreg_knots, num_proj=sigreg_num_proj)}
 
+    def __setstate__(self, state: dict) -> None:
+        """A LeWM that upstream 0.1.1 pickled (``*_object.ckpt``) lacks our training attributes:
+        they get the constructor's defaults."""
+        super().__setstate__(state)
+        for name, value in (("num_preds", 1), ("loss_history", None), ("sigreg_weight", 0.09)):
+            self.__dict__.setdefault(name, value)
+        if "_sigreg" not in self.__dict__:
+            self._sigreg = {"module": SIGReg(knots=17, num_proj=1024)}
+
     def _sigreg_on(self, device: torch.device) -> SIGReg:
         module = self._sigreg["module"]
         if module.t.device != device:

@@ -52,6 +52,13 @@ class Attention(nn.Module):
         else:
             self.to_out = nn.Sequential(nn.Linear(inner, dim), nn.Dropout(dropout))
 
+    def __setstate__(self, state: dict) -> None:
+        """Unpickling a module that upstream 0.1.1 pickled (a ``*_object.ckpt``): it has no
+        ``dim_head`` attribute, which is its ``to_qkv`` width over ``3 * heads``."""
+        super().__setstate__(state)
+        if "dim_head" not in self.__dict__:
+            self.dim_head = self.to_qkv.out_features // (3 * self.heads)
+
     def _heads(self, x: torch.Tensor) -> torch.Tensor:
         b, t, _ = x.shape
         return x.view(b, t, self.heads, self.dim_head).transpose(1, 2)
