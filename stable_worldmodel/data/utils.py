@@ -310,10 +310,10 @@ def convert(
 ) -> Path:
     """Copy dataset ``source`` (anything :func:`load_dataset` opens) to ``dest`` in ``dest_format``, episode by episode.
 
-    Upstream 0.1.1's function; its default destination, Lance, is not bundled here, so the
-    default is HDF5 (``dest`` gets ``.h5`` when it has no suffix). ``dest_kwargs`` go to the
-    destination writer (e.g. ``mode="overwrite"`` for the folder and video formats). Returns
-    the path written.
+    Upstream 0.1.1's function; the default destination is HDF5 here (upstream's: Lance;
+    ``dest_format="lance"`` writes one). ``dest`` gets ``.h5`` (``.lance``) when it has no
+    suffix. ``dest_kwargs`` go to the destination writer (e.g. ``mode="overwrite"`` for the
+    folder and video formats). Returns the path written.
     """
     from tqdm.auto import tqdm
 
