@@ -211,6 +211,39 @@ def train_cmd(
             show_default=False,
         ),
     ] = None,
+    online: Annotated[
+        str | None,
+        typer.Option(
+            "--online",
+            metavar="ENV",
+            help=(
+                "Train online in ENV instead of on a dataset: collect with the model's actor, train on a replay "
+                "buffer, repeat (models with an actor: tdmpc2, gcbc, gcivl, gciql)."
+            ),
+            show_default=False,
+        ),
+    ] = None,
+    seed_episodes: Annotated[
+        int, typer.Option("--seed-episodes", parser=int_in(1), metavar="N", help="--online: random episodes first.")
+    ] = 8,
+    collect_every: Annotated[
+        int,
+        typer.Option(
+            "--collect-every", parser=int_in(1), metavar="N", help="--online: training steps between collections."
+        ),
+    ] = 100,
+    episodes_per_collect: Annotated[
+        int,
+        typer.Option(
+            "--episodes-per-collect", parser=int_in(1), metavar="N", help="--online: episodes per collection."
+        ),
+    ] = 2,
+    num_envs: Annotated[
+        int, typer.Option("--num-envs", parser=int_in(1), metavar="N", help="--online: envs collecting together.")
+    ] = 1,
+    max_steps: Annotated[
+        int, typer.Option("--max-steps", parser=int_in(1), metavar="N", help="--online: steps per episode at most.")
+    ] = 100,
     settings: Annotated[
         list[str] | None,
         typer.Option(
@@ -225,7 +258,8 @@ def train_cmd(
         ),
     ] = None,
 ) -> None:
-    """Train MODEL on a recorded dataset; the checkpoint goes to $STABLEWM_HOME/checkpoints/RUN.
+    """Train MODEL on a recorded dataset (or online in an env: --online ENV); the checkpoint goes to
+    $STABLEWM_HOME/checkpoints/RUN.
 
     Example: swm train lewm --dataset tworoom --preset tiny --name tr-lewm
     (any config field: --set KEY=VALUE,
@@ -265,6 +299,40 @@ def train_cmd(
         if flags[key] is not None:
             overrides[key] = flags[key]
         del flags[key]
+    if online is not None:
+        if dataset is not None or flags["resume"] or flags["epochs"] is not None:
+            raise typer.BadParameter("--online takes no --dataset, --resume or --epochs", param_hint="--online")
+        from ..train.online import train_online
+
+        overrides.setdefault("progress", sys.stderr.isatty())
+        for key in ("resume", "epochs", "precision"):
+            flags.pop(key)
+        result = train_online(
+            model,
+            online,
+            preset,
+            seed_episodes=seed_episodes,
+            collect_every=collect_every,
+            episodes_per_collect=episodes_per_collect,
+            num_envs=num_envs,
+            max_episode_steps=max_steps,
+            **flags,
+            **overrides,
+        )
+        last = next((r for r in reversed(result.history) if "online/return" in r), None)
+        stats = (
+            f", last collection: return {last['online/return']:.2f}, success {100 * last['online/success']:.0f}%"
+            if last
+            else ""
+        )
+        prefix = get_config_class(model).eval_prefix
+        console().print(
+            f"Trained {model} ({preset}) online in {online}: {result.steps} steps in {result.seconds:.0f} s{stats}. "
+            f"Checkpoint: {result.folder} ({'plan' if prefix == 'wm' else 'act'} with: swm eval {online} "
+            f"--policy {prefix}:{result.run}); replay buffer: {result.folder / 'replay.h5'}",
+            soft_wrap=True,
+        )
+        return
     if dataset is None and source is None:
         raise typer.BadParameter("requires --dataset NAME (or --from RUN for a frame decoder)", param_hint="--dataset")
     overrides.setdefault("progress", sys.stderr.isatty())

@@ -23,6 +23,7 @@ last step's outcome lies outside the window: its reward is 0. NaN rewards count 
 from __future__ import annotations
 
 import logging
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -65,12 +66,25 @@ class TrainData:
     or no episode is long enough for one window.
     """
 
-    def __init__(self, name: str, cfg: Any, seed: int, device: torch.device, cache_dir: str | None = None):
+    def __init__(
+        self,
+        name: str,
+        cfg: Any,
+        seed: int,
+        device: torch.device,
+        cache_dir: str | None = None,
+        *,
+        dataset: Any = None,
+    ):
         from ..data.utils import load_dataset, resolve_dataset
 
         self.cfg, self.device, self.seed = cfg, device, seed
-        self.path = resolve_dataset(name, cache_dir, who="Training")  # any registered format
-        self.dataset = load_dataset(self.path, frameskip=cfg.frameskip, num_steps=cfg.num_steps)
+        if dataset is None:
+            self.path = resolve_dataset(name, cache_dir, who="Training")  # any registered format
+            self.dataset = load_dataset(self.path, frameskip=cfg.frameskip, num_steps=cfg.num_steps)
+        else:  # an open dataset with the config's windows (online training: a ReplayBuffer that grows)
+            self.path = Path(getattr(dataset, "path", None) or name)
+            self.dataset = dataset
         self.extra_widths = extra_columns(cfg)
         self.extra_keys = list(self.extra_widths)
         missing = [k for k in (keys.PIXELS, keys.ACTION, *self.extra_keys) if k not in self.dataset.column_names]
@@ -88,12 +102,13 @@ class TrainData:
                 "`swm collect` store the env's reward of every step as 'reward' (an env whose reward is 0 everywhere "
                 "gives nothing to learn)"
             )
-        self.dataset = load_dataset(
-            self.path,
-            frameskip=cfg.frameskip,
-            num_steps=cfg.num_steps,
-            keys_to_load=[keys.PIXELS, keys.ACTION, *self.extra_keys],
-        )
+        if dataset is None:
+            self.dataset = load_dataset(
+                self.path,
+                frameskip=cfg.frameskip,
+                num_steps=cfg.num_steps,
+                keys_to_load=[keys.PIXELS, keys.ACTION, *self.extra_keys],
+            )
         shape, _ = self.dataset.column_shape(keys.PIXELS)
         if len(shape) != 3 or shape[-1] not in (1, 3):
             raise DatasetFormatError(f"Training requires pixels of shape (N, H, W, 3), got {shape} in {self.path}")
@@ -110,17 +125,7 @@ class TrainData:
                     f"Training requires {key}_dim equal to the width of column {key!r}, "
                     f"got {key}_dim={expected} and {width} in {self.path}"
                 )
-        self.train_episodes, self.val_episodes = split_episodes(self.dataset.num_episodes, cfg.val_fraction, seed)
-        eps, _ = self.dataset._locate_many(np.arange(len(self.dataset), dtype=np.int64))
-        in_val = np.isin(eps, self.val_episodes)
-        self.train_index, self.val_index = np.flatnonzero(~in_val), np.flatnonzero(in_val)
-        if not len(self.train_index):
-            longest = int(np.max(self.dataset.lengths)) if self.dataset.num_episodes else 0
-            raise DatasetFormatError(
-                f"Training requires episodes of at least num_steps * frameskip = {cfg.num_steps} * {cfg.frameskip} = "
-                f"{self.dataset.span} steps, got none in the train split of {self.path} (longest: {longest}); "
-                "lower --frameskip / history or record longer episodes"
-            )
+        self._split()
         self.normalizer = self._fit_normalizer()
         # goal_<k> is in the units of <k> when <k> is read too: it shares <k>'s normalizer (planning falls back to it
         # as well, see prepare_info), which the protocol therefore does not repeat
@@ -139,6 +144,31 @@ class TrainData:
         self._reward_cumsum = self._cumulative_rewards() if self.needs_reward else None
         self.features: np.ndarray | None = None  # frozen-encoder features per dataset row (use_features)
         self.goals = self._goal_samplers(cfg) if isinstance(cfg, GoalConditioned) else {}
+
+    def _split(self) -> None:
+        """The seeded split of the episodes into train and validation, and the samples of each."""
+        cfg = self.cfg
+        self.train_episodes, self.val_episodes = split_episodes(self.dataset.num_episodes, cfg.val_fraction, self.seed)
+        eps, _ = self.dataset._locate_many(np.arange(len(self.dataset), dtype=np.int64))
+        in_val = np.isin(eps, self.val_episodes)
+        self.train_index, self.val_index = np.flatnonzero(~in_val), np.flatnonzero(in_val)
+        if not len(self.train_index):
+            longest = int(np.max(self.dataset.lengths)) if self.dataset.num_episodes else 0
+            raise DatasetFormatError(
+                f"Training requires episodes of at least num_steps * frameskip = {cfg.num_steps} * {cfg.frameskip} = "
+                f"{self.dataset.span} steps, got none in the train split of {self.path} (longest: {longest}); "
+                "lower --frameskip / history or record longer episodes"
+            )
+
+    def refresh(self) -> None:
+        """Take in the episodes a growing dataset gained (or lost: a replay buffer evicts): the split,
+        the samples, the rewards and goal samplers follow; the normalizers stay as first fitted
+        (the model learned in their units)."""
+        self._split()
+        if self.needs_reward:
+            self._reward_cumsum = self._cumulative_rewards()
+        if self.goals:
+            self.goals = self._goal_samplers(self.cfg)
 
     def _goal_samplers(self, cfg: Any) -> dict[str, GoalSampler]:
         """Batch key -> sampler of its goals (``goal_pixels``, and ``actor_goal_pixels`` when configured)."""

@@ -151,6 +151,8 @@ class Trainer:
                 _Loss(self.model), device_ids=[device] if device.type == "cuda" else None
             )
         self.step = 0
+        #: called with the trainer before each training step (online training collects there)
+        self.before_step: Any = None
         self.window: list[
             Any
         ] = []  # train losses (floats or 0-d tensors) since the last log (checkpointed, for exact resume)
@@ -257,6 +259,8 @@ class Trainer:
         )
         try:
             while self.step < self.steps:
+                if self.before_step is not None:
+                    self.before_step(self)
                 out = self._train_step_loss(bs)
                 loss = out["loss"]
                 self.optimizer.zero_grad(set_to_none=True)
