@@ -300,12 +300,12 @@ def train_cmd(
             overrides[key] = flags[key]
         del flags[key]
     if online is not None:
-        if dataset is not None or flags["resume"] or flags["epochs"] is not None:
-            raise typer.BadParameter("--online takes no --dataset, --resume or --epochs", param_hint="--online")
+        if dataset is not None or flags["epochs"] is not None:
+            raise typer.BadParameter("--online takes no --dataset or --epochs", param_hint="--online")
         from ..train.online import train_online
 
         overrides.setdefault("progress", sys.stderr.isatty())
-        for key in ("resume", "epochs", "precision"):
+        for key in ("epochs", "precision"):
             flags.pop(key)
         result = train_online(
             model,

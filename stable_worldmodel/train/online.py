@@ -13,8 +13,12 @@ The loop, on one :class:`~stable_worldmodel.world.World` and one
    policy), the buffer takes them in (the oldest evicted past ``buffer_steps``), and the mean
    return and success of those episodes are logged (``online/return``, ``online/success``).
 
-At the end the buffer is written beside the checkpoint (``replay.h5``, the run's dataset: it can
-be trained on offline, or evaluated from). ``swm train MODEL --online ENV`` runs it.
+Every collected episode is also committed, crash-safe, to ``replay.h5`` beside the checkpoint (the
+run's dataset: it can be trained on offline, or evaluated from). ``resume=True`` continues a run
+from its last checkpoint: the normalizers are fitted again on the same seed episodes and the
+buffer is refilled with the file's last episodes (the collection after it is not bit-identical
+to an uninterrupted run's: the actor's samples draw from torch's global stream).
+``swm train MODEL --online ENV [--resume]`` runs it.
 """
 
 from __future__ import annotations
@@ -87,6 +91,60 @@ class ActorPolicy(BasePolicy):
         return [actions[:, i] for i in range(fs)]
 
 
+class _Tee:
+    """The writer collection records into: the replay buffer (what training samples) and the run's
+    ``replay.h5`` (every episode ever collected, committed crash-safe: what a resumed run reloads)."""
+
+    def __init__(self, buffer: Any, writer: Any):
+        self.buffer, self.writer = buffer, writer
+
+    @property
+    def next_seed(self) -> int | None:
+        return self.writer.next_seed
+
+    @property
+    def num_episodes(self) -> int:
+        return self.writer.num_episodes
+
+    def write_episodes(self, episodes: list, next_seed: int | None = None) -> None:
+        self.writer.write_episodes(episodes, next_seed=next_seed)  # on disk first: a kill keeps it
+        self.buffer.write_episodes(episodes)
+
+
+def _refill(buffer: Any, path: Any) -> int:
+    """Put the last episodes of ``path`` (the run's replay file) into ``buffer``, oldest first, as
+    many as it holds; returns the number of episodes in the file."""
+    from ..data import HDF5Dataset
+
+    replay = HDF5Dataset(path=path, preload=False)
+    try:
+        lengths, total, first = np.asarray(replay.lengths), 0, len(replay.lengths)
+        while first > 0 and total + int(lengths[first - 1]) <= buffer.max_steps:
+            first -= 1
+            total += int(lengths[first])
+        for ep in range(first, len(lengths)):
+            o, n = int(replay.offsets[ep]), int(lengths[ep])
+            buffer.write_episode({col: replay._read(col, o, o + n) for col in replay.stored_columns})
+        return len(lengths)
+    finally:
+        replay.close()
+
+
+def _first_episodes(path: Any, count: int) -> list[dict[str, np.ndarray]]:
+    """The first ``count`` episodes of the replay file ``path`` (the seed episodes), as column -> rows."""
+    from ..data import HDF5Dataset
+
+    replay = HDF5Dataset(path=path, preload=False)
+    try:
+        out = []
+        for ep in range(min(count, replay.num_episodes)):
+            o, n = int(replay.offsets[ep]), int(replay.lengths[ep])
+            out.append({col: replay._read(col, o, o + n) for col in replay.stored_columns})
+        return out
+    finally:
+        replay.close()
+
+
 def _episode_stats(buffer: Any, count: int) -> dict[str, float]:
     """Mean return and success (any ``terminated``) of the last ``count`` episodes of ``buffer``."""
     lengths, offsets = buffer.lengths[-count:], buffer.offsets[-count:]
@@ -113,6 +171,7 @@ def train_online(
     max_episode_steps: int = 100,
     name: str | None = None,
     seed: int = 0,
+    resume: bool = False,
     device: str = "auto",
     cache_dir: str | None = None,
     progress: bool = True,
@@ -129,6 +188,7 @@ def train_online(
     from .. import World
     from .._device import resolve_device
     from ..data import ReplayBuffer
+    from ..data.writer import ENV_ID_ATTR, HDF5Writer
     from ..errors import check_int
     from ..policy import RandomPolicy
     from ..wm import get_config
@@ -136,8 +196,9 @@ def train_online(
     from ..wm.base import Actor
     from ..wm.run import PROTOCOL_VERSION, lock_run
     from ..world.recording import record_episodes
+    from . import _check_run_folder
     from .data import TrainData
-    from .run import MetricsLog
+    from .run import STATE_NAME, MetricsLog, load_train_state
     from .trainer import Trainer
 
     who = "train_online"
@@ -175,23 +236,33 @@ def train_online(
         raise ConfigError(f"{who} requires a plain run name (no path), got {run!r}")
     folder = wmu.checkpoint_root(cache_dir) / run
     lock = lock_run(folder, run)
-    world = None
+    world = writer = None
     try:
-        if folder.exists() and any(folder.iterdir()):
-            raise ConfigError(
-                f"{who} requires a new run name, got {run!r}, whose folder {folder} exists; pass another name"
-            )
+        resume = _check_run_folder(folder, resume, run)
         size = (cfg.image_size, cfg.image_size)
         world = World(
             env, num_envs, size, max_episode_steps=max_episode_steps, verbose=0, history_size=cfg.history_size
         )
+        folder.mkdir(parents=True, exist_ok=True)
+        writer = HDF5Writer(folder / REPLAY_FILE, attrs={ENV_ID_ATTR: env})
         buffer = ReplayBuffer(buffer_steps, history_len=cfg.num_steps, frameskip=cfg.frameskip, seed=seed)
-        world.set_policy(RandomPolicy(seed=seed))
-        next_seed = seed
-        record_episodes(world, buffer, seed_episodes, next_seed, None, "Seed episodes", with_idx=False)
-        next_seed += seed_episodes
+        sink = _Tee(buffer, writer)
+        if resume:  # the normalizers are fitted on the same seed episodes, the buffer holds the last episodes
+            seeds_only = ReplayBuffer(buffer_steps, history_len=cfg.num_steps, frameskip=cfg.frameskip)
+            for episode in _first_episodes(folder / REPLAY_FILE, seed_episodes):
+                seeds_only.write_episode(episode)
+            _refill(buffer, folder / REPLAY_FILE)
+            next_seed = int(writer.next_seed if writer.next_seed is not None else seed + writer.num_episodes)
+        else:
+            world.set_policy(RandomPolicy(seed=seed))
+            record_episodes(world, sink, seed_episodes, seed, None, "Seed episodes", with_idx=False)
+            next_seed = seed + seed_episodes
+            seeds_only = buffer
         torch.manual_seed(seed)
-        data = TrainData(f"online:{env}", cfg, seed=seed, device=dev, dataset=buffer)
+        data = TrainData(f"online:{env}", cfg, seed=seed, device=dev, dataset=seeds_only)
+        if seeds_only is not buffer:
+            data.dataset = buffer
+            data.refresh()
         tree = cfg.target_tree(data.action_dim)
         torch.manual_seed(seed)
         net = wmu.instantiate(tree)
@@ -241,8 +312,15 @@ def train_online(
             config_tree=tree,
             protocol=protocol,
         )
-        folder.mkdir(parents=True, exist_ok=True)
-        log = MetricsLog(folder, resume_step=None)
+        if resume:
+            state = load_train_state(folder / STATE_NAME, map_location=dev)
+            if int(state.get("steps", steps)) != steps:
+                raise ConfigError(
+                    f"{who}(resume=True) requires the same number of steps as the run ({state.get('steps')}), "
+                    f"got {steps}"
+                )
+            trainer.load_state_dict(state)
+        log = MetricsLog(folder, resume_step=trainer.step if resume else None)
         policy = ActorPolicy(net, data, cfg, dev)
 
         def collect(tr: Any) -> None:
@@ -252,7 +330,7 @@ def train_online(
             net.eval()
             world.set_policy(policy)
             policy.queue = []
-            record_episodes(world, buffer, episodes_per_collect, next_seed, None, "Collecting", with_idx=False)
+            record_episodes(world, sink, episodes_per_collect, next_seed, None, "Collecting", with_idx=False)
             next_seed += episodes_per_collect
             net.train()
             data.refresh()
@@ -261,10 +339,10 @@ def train_online(
             logger.info("step %d: %s", tr.step, stats)
 
         trainer.before_step = collect
-        result = trainer.fit(log)
-        buffer.dump(folder / REPLAY_FILE, "hdf5")
-        return result
+        return trainer.fit(log)
     finally:
+        if writer is not None:
+            writer.close()
         if world is not None:
             world.close()
         lock.release()

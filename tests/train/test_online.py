@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 
 from stable_worldmodel import keys
-from stable_worldmodel.errors import ConfigError
 
 TOY = "swm/Toy-v0"
 #: a small TD-MPC2 on the Toy env's positions (its latent holds the goal through goal_proprio)
@@ -84,9 +83,46 @@ def test_swm_train_online_and_its_errors(swm, error_line, _stablewm_home):
     assert "online in swm/Toy-v0: 4 steps" in result.stdout and "replay.h5" in result.stdout
     assert (_stablewm_home / "checkpoints" / "Toy-v0-tdmpc2-online" / "replay.h5").is_file()
     both = swm("train", "tdmpc2", "--online", TOY, "--dataset", "x")
-    assert both.exit_code == 2 and "--online takes no --dataset" in both.output
+    assert both.exit_code == 2 and "--online takes no --dataset or --epochs" in both.output
     planner = swm("train", "lewm", "--online", TOY, "--steps", "2", "--seed-episodes", "2", "--max-steps", "8")
     assert planner.exit_code == 1 and "requires a model with an actor (get_action), got 'lewm'" in error_line(planner)
+
+
+def test_an_interrupted_online_run_resumes(monkeypatch, one_torch_thread, _stablewm_home):
+    from stable_worldmodel.train import online
+    from stable_worldmodel.train.online import train_online
+
+    args = dict(
+        steps=20, seed_episodes=2, collect_every=4, episodes_per_collect=1, max_episode_steps=8, ckpt_every=5,
+        progress=False, log_every=5, name="r", **NET,
+    )  # fmt: skip
+    stats, calls = online._episode_stats, []
+
+    def dies_at_step_12(buffer, count):
+        calls.append(count)
+        if len(calls) == 3:  # the collection at step 12: killed there
+            raise KeyboardInterrupt
+        return stats(buffer, count)
+
+    monkeypatch.setattr(online, "_episode_stats", dies_at_step_12)
+    with pytest.raises(KeyboardInterrupt):
+        train_online("tdmpc2", TOY, **args)
+    folder = _stablewm_home / "checkpoints" / "r"
+    from stable_worldmodel.data import HDF5Dataset
+
+    assert HDF5Dataset(path=folder / "replay.h5").num_episodes == 2 + 3  # every collected episode was committed
+    with pytest.raises(FileExistsError, match="pass resume=True"):
+        train_online("tdmpc2", TOY, **args)
+    monkeypatch.setattr(online, "_episode_stats", stats)
+    result = train_online("tdmpc2", TOY, resume=True, **args)
+    assert result.steps == 20
+    collected = [r["step"] for r in json_lines(folder / "metrics.jsonl") if "online/return" in r]
+    assert collected == [4, 8, 12, 16]  # from the checkpoint at step 10 on: 12 is collected again, then 16
+    assert HDF5Dataset(path=folder / "replay.h5").num_episodes == 2 + 3 + 2
+
+
+def json_lines(path):
+    return [json.loads(line) for line in path.read_text().splitlines()]
 
 
 def test_train_online_refuses_an_existing_run(_stablewm_home):
@@ -94,5 +130,5 @@ def test_train_online_refuses_an_existing_run(_stablewm_home):
 
     (_stablewm_home / "checkpoints" / "taken").mkdir(parents=True)
     (_stablewm_home / "checkpoints" / "taken" / "weights.pt").write_bytes(b"")
-    with pytest.raises(ConfigError, match="requires a new run name, got 'taken'"):
+    with pytest.raises(FileExistsError, match="pass resume=True"):
         train_online("tdmpc2", TOY, steps=2, name="taken", seed_episodes=1, **NET)
