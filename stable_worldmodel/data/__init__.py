@@ -39,6 +39,7 @@ _ATTRS: dict[str, str] = {
     "record_video_from_dataset": "video",
     "load_dataset": "utils",
     "ReplayBuffer": "buffer",
+    "LeRobotAdapter": "lerobot",
     "classic_filter": "buffer",
     "resolve_dataset": "utils",
     "column_normalizer": "utils",
@@ -88,6 +89,7 @@ if TYPE_CHECKING:  # pragma: no cover
         list_worlds,
         world_info,
     )
+    from .lerobot import LeRobotAdapter  # noqa: F401
     from .normalization import IdentityScaler, PercentileScaler, ZScoreScaler, get_scaler  # noqa: F401
     from .utils import column_normalizer, load_dataset, resolve_dataset  # noqa: F401
     from .video import record_video_from_dataset  # noqa: F401

@@ -263,11 +263,20 @@ def load_dataset(
     text = os.fspath(name) if isinstance(name, (str, os.PathLike)) else None
     if not isinstance(text, str) or not text.strip():
         raise ConfigError(f"load_dataset requires a dataset name or path, got {name!r}")
-    if "://" in text:
-        raise ConfigError(
-            f"load_dataset requires a local dataset, got the URL {text!r}: "
-            f"no registered format ({', '.join(list_formats())}) reads URLs"
-        )
+    options = dict(num_steps=num_steps, frameskip=frameskip, keys_to_load=keys_to_load, transform=transform, **kwargs)
+    if keys_to_cache is not None:
+        options["keys_to_cache"] = keys_to_cache
+    if "://" in text:  # a URL: opened only by a format that reads its scheme (lerobot://org/name)
+        scheme = text.split("://", 1)[0]
+        formats = [get_format(n) for n in ([format] if format is not None else list_formats())]
+        fmt = next((f for f in formats if scheme in getattr(f, "schemes", ()) and f.detect(text)), None)
+        if fmt is None:
+            which = f"format {format!r} does not read" if format is not None else "no registered format reads"
+            raise ConfigError(
+                f"load_dataset requires a local dataset, got the URL {text!r}: "
+                f"{which} {scheme}:// URLs (formats: {', '.join(list_formats())})"
+            )
+        return fmt.open_reader(text, **options)
     path = resolve_dataset(text, cache_dir)
     if path.is_dir() and format is None and detect_format(path) is None:
         files = sorted(path.glob("*.h5")) + sorted(path.glob("*.hdf5"))
@@ -279,9 +288,6 @@ def load_dataset(
             f"load_dataset requires a dataset in a registered format ({', '.join(list_formats())}), got {str(path)!r}, "
             "which none of them recognises; pass format= to force one"
         )
-    options = dict(num_steps=num_steps, frameskip=frameskip, keys_to_load=keys_to_load, transform=transform, **kwargs)
-    if keys_to_cache is not None:
-        options["keys_to_cache"] = keys_to_cache
     return fmt.open_reader(path, **options)
 
 

@@ -8,5 +8,6 @@ from . import video  # noqa: F401 (imported to register the format)
 from . import folder  # noqa: F401 (imported to register the format)
 from . import meta  # noqa: F401 (imported to register the format)
 from . import lance  # noqa: F401 (imported to register the format)
+from . import lerobot  # noqa: F401 (imported to register the format)
 
 # isort: on
