@@ -248,12 +248,19 @@ class BaseSolver:
 
     # -- configuration -----------------------------------------------------------------
     def configure(self, *, action_space: gym.Space, n_envs: int, config: Any) -> None:
-        """Set the batched ``action_space`` (leading dim ``n_envs``) and the ``PlanConfig``."""
+        """Set the batched ``action_space`` (leading dim ``n_envs``) and the ``PlanConfig``. One env's
+        ``Box`` (a first dim other than ``n_envs``) is batched to ``n_envs`` envs, as 0.0.3 accepted it."""
         self._check_positive(n_envs=n_envs)
         for attr in ("horizon", "action_block"):
             if not isinstance(getattr(config, attr, None), (int, np.integer)):
                 raise ConfigError(f"{type(self).__name__} requires a PlanConfig with {attr}, got {config!r}")
         shape = getattr(action_space, "shape", None)
+        if isinstance(action_space, gym.spaces.Box) and shape and shape[0] != n_envs:
+            # one env's space (release 0.0.3's examples pass it): every env gets the same bounds
+            from gymnasium.vector.utils import batch_space
+
+            action_space = batch_space(action_space, int(n_envs))
+            shape = action_space.shape
         if not shape or shape[0] != n_envs:
             raise SpaceError(
                 f"{type(self).__name__} requires the batched action space with leading dim n_envs={n_envs}, "

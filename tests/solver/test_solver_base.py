@@ -67,8 +67,9 @@ def test_call_is_solve_and_result_is_on_cpu():
 def test_solve_before_configure_and_bad_spaces_raise():
     with pytest.raises(ConfigError, match="configure"):
         CEMSolver(Bowl()).solve({})
-    with pytest.raises(SpaceError, match="batched"):
-        CEMSolver(Bowl()).configure(action_space=gym.spaces.Box(-1, 1, (2,)), n_envs=3, config=PlanConfig(2, 1))
+    one_env = CEMSolver(Bowl())  # one env's Box (0.0.3's examples): batched to the n_envs
+    one_env.configure(action_space=gym.spaces.Box(-1, 1, (2,)), n_envs=3, config=PlanConfig(2, 1))
+    assert one_env.action_space.shape == (3, 2) and one_env.action_dim == 2
     with pytest.raises(SpaceError, match="Box"):
         CEMSolver(Bowl()).configure(action_space=gym.spaces.MultiDiscrete([3, 3]), n_envs=2, config=PlanConfig(2, 1))
     with pytest.raises(ConfigError, match="PlanConfig"):
