@@ -43,7 +43,8 @@ class EverythingToInfoWrapper(gym.Wrapper):
     ``step_idx``            steps since reset (0 after reset)
     ``id``                  episode counter of this env (starts at 0)
     ``variation.<factor>``  value of each factor named in ``reset(options={"variation": [...]})``
-                            (``["all"]`` = every factor), fixed for the episode
+                            (``["all"]`` = every factor), fixed for the episode; a later reset
+                            without the option reports the same factors (as release 0.0.3)
     ======================  ======================================================
 
     Keys are never overwritten: an env whose info (or Dict observation) already holds one of
@@ -61,10 +62,13 @@ class EverythingToInfoWrapper(gym.Wrapper):
         self._step_idx = 0
         self._episode = -1
         self._variation: dict[str, Any] = {}
+        self._requested: Any = None
         self._nan_action = nan_action(env.action_space)
 
     def _variation_info(self, options: dict | None) -> dict[str, Any]:
-        requested = (options or {}).get(keys.VARIATION)
+        if options and keys.VARIATION in options:
+            self._requested = options[keys.VARIATION]
+        requested = self._requested  # a reset without the option reports the factors named last (0.0.3)
         space = getattr(self.env.unwrapped, "variation_space", None)
         if not requested or space is None:
             return {}

@@ -102,8 +102,14 @@ def test_everything_to_info_variation_keys():
     _, info = env.reset(seed=0, options={"variation": ["all"]})
     names = env.unwrapped.variation_space.names()
     assert {f"variation.{n}" for n in names} <= set(info)
+    _, info = env.reset(seed=1)  # no option: the factors named last are reported again (observed on 0.0.3)
+    assert {f"variation.{n}" for n in names} <= set(info)
+    _, info = env.reset(seed=0, options={"variation": []})  # an empty list stops it
+    assert not any(k.startswith("variation.") for k in info)
     _, info = env.reset(seed=0)
     assert not any(k.startswith("variation.") for k in info)
+    fresh = EverythingToInfoWrapper(ToyEnv())
+    assert not any(k.startswith("variation.") for k in fresh.reset(seed=0)[1])
 
 
 def test_everything_to_info_non_dict_observation():
