@@ -15,9 +15,9 @@ contiguous stretch of the ring (modulo its length), and row ``r`` of the dataset
 concatenated, oldest first) lives at ring position ``(oldest + r) % max_steps``.
 
 Items are upstream's: numpy arrays as stored (images ``(T, H, W, C)``; a DataLoader collates
-them into tensors), ``action`` and the other ``dense_columns`` grouped into ``(T, frameskip * ...)``
-blocks, then ``transform``; :meth:`ReplayBuffer.sample` returns the same ``(B, T, ...)``,
-untransformed.
+them into tensors); ``transform`` sees the gathered rows, which are then grouped per frame
+(``action`` ``(T, frameskip * A)``, the other ``dense_columns`` ``(T, frameskip, ...)``);
+:meth:`ReplayBuffer.sample` returns the same, ``(B, T, ...)``, untransformed.
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ import numpy as np
 
 from .. import keys
 from ..errors import ConfigError, DatasetFormatError, NotEnoughDataError, check_int
-from .dataset import Dataset
+from .dataset import Dataset, group_dense
 from .format import per_step_columns
 
 __all__ = ["ReplayBuffer", "Sampler", "classic_filter", "uniform_sampler"]
@@ -70,8 +70,8 @@ class ReplayBuffer(Dataset):
         history_len: frames per window (``num_steps`` of the other datasets).
         frameskip: rows between two frames of a window.
         sampler: which windows :meth:`sample` draws (:data:`Sampler`; default :func:`uniform_sampler`).
-        transform: applied to each item (``buffer[i]``, the DataLoader path; it sees grouped
-            actions, as upstream's buffer), not by :meth:`sample`.
+        transform: applied to each item (``buffer[i]``, the DataLoader path; it sees the raw
+            rows, before grouping, as upstream main's guide says), not by :meth:`sample`.
         key_filter: ``episode -> episode`` applied to every written episode (e.g. :func:`classic_filter`).
         dense_columns: columns read at every row and grouped, as ``action`` always is.
         seed: of :attr:`rng`, which the default sampler draws from.
@@ -205,13 +205,17 @@ class ReplayBuffer(Dataset):
 
     def __getitem__(self, idx: int) -> dict[str, Any]:
         """Window ``idx`` as upstream's buffer gives it: numpy arrays as stored (images
-        ``(T, H, W, C)``), dense columns grouped ``(T, frameskip * ...)``, then ``transform``."""
+        ``(T, H, W, C)``); ``transform`` sees the gathered rows (dense columns ``T * frameskip``
+        of them), which are then grouped (``action`` ``(T, frameskip * A)``, other dense columns
+        ``(T, frameskip, ...)``), as upstream main's guide describes."""
         eps, steps = self._locate_many(np.asarray([idx], np.int64))  # IndexError out of range
         start = self.offsets[eps] + steps
         clip = {col: self._read_windows(col, start)[0] for col in self.keys_to_load}
+        if self.transform is not None:
+            clip = dict(self.transform(clip))  # grouped in a new dict: the transform's stays as it returned it
         for col in self.dense_columns.intersection(clip):
-            clip[col] = clip[col].reshape(self.num_steps, -1)
-        return self.transform(clip) if self.transform is not None else clip
+            clip[col] = group_dense(col, np.asarray(clip[col]), self.num_steps)
+        return clip
 
     @property
     def num_steps_stored(self) -> int:
@@ -250,7 +254,7 @@ class ReplayBuffer(Dataset):
             dense = col in self.dense_columns
             offsets = np.arange(0, span, 1 if dense else self.frameskip)
             rows = ring[(self._oldest + starts[:, None] + offsets) % self.max_steps]
-            out[col] = rows.reshape(batch_size, h, -1) if dense else rows
+            out[col] = group_dense(col, rows, h, batched=True) if dense else rows
         return out
 
     # -- contents -----------------------------------------------------------------------------

@@ -71,6 +71,17 @@ def dense_set(columns: Collection[str] | str | None, owner: str) -> frozenset[st
     return frozenset({keys.ACTION, *extra})
 
 
+def group_dense(col: str, rows: Any, num_steps: int, batched: bool = False) -> Any:
+    """Rows of a window's dense column, ``(T * frameskip, ...)`` (``(B, ...)`` first when ``batched``),
+    grouped per frame: ``action`` into ``(T, frameskip * A)`` blocks, every other dense column into
+    ``(T, frameskip, ...)`` (upstream main's convention, a singleton axis when ``frameskip`` is 1)."""
+    lead = (rows.shape[0],) if batched else ()
+    if col == keys.ACTION:
+        return rows.reshape(*lead, num_steps, -1)
+    tail = tuple(rows.shape[len(lead) + 1 :])
+    return rows.reshape(*lead, num_steps, -1, *tail)
+
+
 def _episode_array(name: str, value: Any, owner: str) -> np.ndarray:
     """``value`` as a 1-D int64 array of non-negative row counts or offsets."""
     arr = np.asarray(value)
@@ -96,8 +107,9 @@ class Dataset(_TorchDataset):
         num_steps: frames per sample (T).
         transform: optional callable applied to each item dict.
         keys_to_load: columns to put in items (default: all).
-        dense_columns: columns read at every row of a window and grouped into
-            ``(T, frameskip * ...)`` blocks, as ``action`` always is (upstream's main).
+        dense_columns: columns read at every row of a window, as ``action`` always is, and
+            grouped per frame into ``(T, frameskip, ...)`` (upstream's main; ``action``:
+            ``(T, frameskip * A)``).
     """
 
     #: ``action`` and the ``dense_columns`` given (see :func:`dense_set`)
@@ -327,9 +339,9 @@ class Dataset(_TorchDataset):
         eps, steps = self._locate_many(idx.astype(np.int64))
         starts = self._sample_index()[1][eps] + steps
         cols = {col: self._read_windows(col, starts) for col in self.keys_to_load}
-        if group_actions:  # (B, span, A) -> (B, T, frameskip * A), the same for every dense column
+        if group_actions:  # (B, span, A) -> (B, T, frameskip * A); other dense columns (B, T, frameskip, ...)
             for col in self.dense_columns.intersection(cols):
-                cols[col] = cols[col].reshape(len(starts), self.num_steps, -1)
+                cols[col] = group_dense(col, cols[col], self.num_steps, batched=True)
         return to_tensors(cols, batch=True, owned=True)  # gathered rows are fresh arrays
 
     def _transformed(self, item: dict[str, Any]) -> dict[str, Any]:
@@ -339,7 +351,7 @@ class Dataset(_TorchDataset):
         if self.transform is not None:
             item = self.transform(item)
         for col in self.dense_columns.intersection(item):
-            item[col] = item[col].reshape(self.num_steps, -1)
+            item[col] = group_dense(col, item[col], self.num_steps)
         return item
 
     def _load_slice(self, ep_idx: int, start: int, end: int) -> dict[str, Any]:

@@ -241,3 +241,77 @@ def test_dense_columns_of_a_dataset(tmp_path):
     assert item["step"].tolist() == [[0, 1, 2], [3, 4, 5]]  # every row, grouped like the action
     assert item["ep"].tolist() == [0, 0] and item[keys.ACTION].shape == (2, 6)
     assert ds.__getitems__([0])[0]["step"].tolist() == [[0, 1, 2], [3, 4, 5]]
+
+
+# -- upstream main's docs/guides/online_learning.md, its snippets as written --------------------------------
+def test_guide_quick_tour_runs_unchanged(tmp_path, monkeypatch):
+    """The guide's Quick Tour (``train_step`` is the reader's: here it counts batches)."""
+    monkeypatch.chdir(tmp_path)
+    batches = []
+
+    def train_step(batch):
+        batches.append(batch)
+
+    from torch.utils.data import DataLoader
+
+    import stable_worldmodel as swm
+    from stable_worldmodel.data import ReplayBuffer
+
+    # 1) Create a buffer. max_steps caps total in-RAM transitions.
+    buf = ReplayBuffer(max_steps=100_000, history_len=4)
+
+    # 2) Fill it. World.collect accepts the buffer directly as a writer.
+    world = swm.World("swm/PushT-v1", num_envs=4, image_shape=(64, 64))
+    world.set_policy(swm.policy.RandomPolicy(seed=0))
+    world.collect(writer=buf, episodes=20, seed=0)
+
+    # 3) Train on it via a DataLoader (Dataset path).
+    loader = DataLoader(buf, batch_size=64, shuffle=True)
+    for batch in loader:
+        train_step(batch)  # batch[col] shape: (64, history_len, ...)
+
+    # 4) Or sample directly (custom-sampler path).
+    batch = buf.sample(batch_size=64)  # {col: (64, history_len, ...)} numpy arrays
+
+    # 5) Dump to disk at any point — picks any registered Format.
+    buf.dump("runs/replay.h5", format="hdf5")
+
+    assert buf.num_episodes == 20 and len(batches) == -(-len(buf) // 64)
+    assert batches[0]["pixels"].shape == (64, 4, 64, 64, 3) and batch["pixels"].shape == (64, 4, 64, 64, 3)
+    assert swm.data.load_dataset("runs/replay.h5").num_episodes == 20
+
+
+def test_guide_eviction_and_frameskip_semantics():
+    def _ep(n, a=2):
+        return {
+            "pixels": np.zeros((n, 4, 4, 3), np.uint8),
+            "action": np.ones((n, a), np.float32),
+            "reward": np.arange(n, dtype=np.float32),
+            "terminated": np.arange(n) == n - 1,
+        }
+
+    buf = ReplayBuffer(max_steps=50, history_len=2)
+    buf.write_episode(_ep(30))  # buf: [30 steps]
+    buf.write_episode(_ep(15))  # buf: [30, 15] — 45 steps used
+    buf.write_episode(_ep(20))  # buf: [15, 20] — oldest episode evicted to fit
+    assert buf.lengths.tolist() == [15, 20]
+
+    buf = ReplayBuffer(max_steps=10_000, history_len=4, frameskip=2, dense_columns=["reward", "terminated"])
+    buf.write_episode(_ep(12))
+    clip = buf[0]
+    assert clip["pixels"].shape == (4, 4, 4, 3)  # strided observations
+    assert clip["action"].shape == (4, 2 * 2)  # action chunks
+    assert clip["reward"].shape == (4, 2) and clip["terminated"].shape == (4, 2)
+    assert clip["reward"].tolist() == [[0, 1], [2, 3], [4, 5], [6, 7]]
+    seen = []
+    raw = ReplayBuffer(
+        1000, history_len=4, frameskip=2, dense_columns=["reward"], transform=lambda c: seen.append(c) or c
+    )
+    raw.write_episode(_ep(12))
+    raw[0]
+    assert seen[0]["reward"].shape == (8,) and seen[0]["pixels"].shape == (4, 4, 4, 3)  # rows before grouping
+    sampled = buf.sample(3)
+    assert sampled["reward"].shape == (3, 4, 2) and sampled["action"].shape == (3, 4, 4)
+    vec = ReplayBuffer(1000, history_len=2, frameskip=3, dense_columns=["state"])
+    vec.write_episode({"state": np.arange(24, dtype=np.float32).reshape(12, 2), "action": np.zeros((12, 1))})
+    assert vec[0]["state"].shape == (2, 3, 2)  # (H, K, ...) for a vector column
