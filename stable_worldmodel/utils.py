@@ -7,6 +7,7 @@ that it exits with the child's return code when the script fails (kept for compa
 from __future__ import annotations
 
 import logging
+import os
 import shlex
 import subprocess
 import sys
@@ -77,7 +78,8 @@ def pretraining(
     """Run a (Hydra) pretraining script in a subprocess with the current interpreter.
 
     The command is ``[python, script_path, *shlex.split(args), "++dump_object=<bool>",
-    "dataset_name=<...>", "output_model_name=<...>"]``. Returns 0 on success.
+    "dataset_name=<...>", "output_model_name=<...>"]`` (a name with spaces stays one argument,
+    where 0.0.3 split it), with ``PYTHONUNBUFFERED=1`` unless set. Returns 0 on success.
 
     Raises ConfigError (a ValueError) when ``script_path`` is not a file. When the script
     fails, calls ``sys.exit`` with its return code (SystemExit), as seed 000 specifies.
@@ -94,8 +96,10 @@ def pretraining(
         f"output_model_name={output_model_name}",
     ]
     logger.info("pretraining: %s", shlex.join(cmd))
+    env = os.environ.copy()
+    env.setdefault("PYTHONUNBUFFERED", "1")  # the script's prints reach a log as they happen (as 0.0.3)
     try:
-        subprocess.run(cmd, check=True)
+        subprocess.run(cmd, check=True, env=env)
     except subprocess.CalledProcessError as exc:
         logger.error("pretraining script %s failed with return code %d", script, exc.returncode)
         sys.exit(exc.returncode)

@@ -101,3 +101,12 @@ def test_record_video_from_dataset_forwards(monkeypatch):
     monkeypatch.setitem(sys.modules, "stable_worldmodel.data.video", fake)
     assert utils.record_video_from_dataset("v.mp4", "ds", [0, 1], fps=10) == "done"
     assert calls == [(("v.mp4", "ds", [0, 1]), {"max_steps": 500, "fps": 10, "viewname": "pixels"})]
+
+
+def test_pretraining_runs_the_script_unbuffered(tmp_path, monkeypatch):
+    """As 0.0.3: ``PYTHONUNBUFFERED=1`` unless the caller set it."""
+    monkeypatch.delenv("PYTHONUNBUFFERED", raising=False)
+    script = tmp_path / "env.py"
+    script.write_text("import os, sys\nopen(sys.argv[1], 'w').write(os.environ.get('PYTHONUNBUFFERED', ''))\n")
+    pretraining(str(script), "d", "m", args=str(tmp_path / "out.txt"))
+    assert (tmp_path / "out.txt").read_text() == "1"
