@@ -387,6 +387,45 @@ class GoalDataset(_TorchDataset):
             return kind, ep, min(current + k, int(lengths[ep]) - 1)
         return kind, ep, current
 
+    # -- release 0.0.3's goal-sampling helpers (subclasses in research code call them) ------------------
+    @property
+    def _total_steps(self) -> int:
+        return int(self._row_cum[-1]) if len(self._row_cum) else 0
+
+    @property
+    def _episode_cumlen(self) -> np.ndarray:
+        return self._row_cum
+
+    def _sample_goal_kind(self) -> str:
+        """``"random"``, ``"future"`` or ``"current"``, drawn from :attr:`rng` by ``goal_probabilities``."""
+        return ("random", "future", "current")[int(self.rng.choice(3, p=self._probs))]
+
+    def _sample_random_step(self) -> tuple[int, int]:
+        """A uniformly drawn ``(episode, step)`` of the whole dataset."""
+        if self._total_steps == 0:
+            return 0, 0
+        row = int(self.rng.integers(self._total_steps))
+        ep = int(np.searchsorted(self._row_cum, row, side="right"))
+        return ep, row - (int(self._row_cum[ep - 1]) if ep else 0)
+
+    def _sample_future_step(self, ep_idx: int, local_start: int) -> tuple[int, int]:
+        """``(ep_idx, local_start + k * frameskip)`` with ``k >= 1`` geometric (parameter ``1 - gamma``),
+        clipped to the episode's last step (``local_start`` itself when none is left)."""
+        frameskip = int(getattr(self.dataset, "frameskip", 1))
+        left = (int(self.episode_lengths[ep_idx]) - 1 - int(local_start)) // frameskip
+        if left <= 0:
+            return ep_idx, int(local_start)
+        k = min(int(self.rng.geometric(max(1.0 - self.gamma, 1e-6))), left)
+        return ep_idx, int(local_start) + k * frameskip
+
+    def _get_clip_info(self, idx: int) -> tuple[int, int]:
+        """``(episode, first step)`` of sample ``idx``."""
+        return _clip(self.dataset, idx)
+
+    def _load_single_step(self, ep_idx: int, local_idx: int) -> dict[str, Any]:
+        """Row ``local_idx`` of episode ``ep_idx``, every loaded column, as the dataset gives rows."""
+        return self.dataset.load_chunk([ep_idx], [local_idx], [local_idx + 1])[0]
+
     def _goal(self, ep: int, step: int) -> dict[str, Any]:
         if isinstance(self.dataset, Dataset) and not self.dataset._from_slices:  # ours: any column, loaded or not
             row = int(self.dataset.offsets[ep]) + step

@@ -222,3 +222,22 @@ def test_module_paths_of_003_and_011_import():
     from stable_worldmodel.data.utils import column_normalizer, get_cache_dir, load_dataset  # noqa: F401
 
     assert (F1, H1, V1) == (F2, H2, V2) and H1 is HDF5Dataset and FolderWriter.__name__ == "FolderWriter"
+
+
+def test_goal_dataset_private_helpers_of_003(make_h5):
+    """0.0.3's GoalDataset helpers, which research subclasses call: ``_sample_goal_kind``,
+    ``_sample_random_step``, ``_sample_future_step``, ``_get_clip_info``, ``_load_single_step``."""
+    ds = HDF5Dataset(make_h5(LENGTHS), num_steps=2, frameskip=2)
+    goal = GoalDataset(ds, goal_probabilities=(0.2, 0.5, 0.3), gamma=0.5, seed=3)
+    kinds = [goal._sample_goal_kind() for _ in range(300)]
+    assert set(kinds) == {"random", "future", "current"} and 0.35 < kinds.count("future") / 300 < 0.65
+    assert goal._total_steps == sum(LENGTHS) and goal._episode_cumlen.tolist() == list(np.cumsum(LENGTHS))
+    for _ in range(50):
+        ep, step = goal._sample_random_step()
+        assert 0 <= step < LENGTHS[ep]
+        ep, fut = goal._sample_future_step(1, 2)
+        assert ep == 1 and fut > 2 and (fut - 2) % 2 == 0 and fut <= LENGTHS[1] - 1
+    assert goal._sample_future_step(0, LENGTHS[0] - 1) == (0, LENGTHS[0] - 1)  # nothing left: the step itself
+    assert goal._get_clip_info(0) == (0, 0)
+    row = goal._load_single_step(1, 3)
+    np.testing.assert_array_equal(row[keys.STATE].numpy(), ds.get_col_data(keys.STATE)[LENGTHS[0] + 3 : LENGTHS[0] + 4])
