@@ -117,12 +117,24 @@ def _encode(frame: np.ndarray, quality: int) -> bytes:
 
 
 def _decode(blob: bytes, channels: int | None) -> np.ndarray:
-    from PIL import Image
+    """One encoded frame as uint8 ``(H, W, C)`` (``C`` 3 unless the writer recorded 1 or 4): OpenCV
+    decodes JPEG ~2.5x faster than PIL; PIL is the fallback for what OpenCV cannot read."""
+    import cv2
 
-    with Image.open(io.BytesIO(blob)) as img:
-        if channels == 1:
-            return np.asarray(img.convert("L"))[..., None]
-        return np.asarray(img.convert("RGBA" if channels == 4 else "RGB"))
+    flag = cv2.IMREAD_GRAYSCALE if channels == 1 else cv2.IMREAD_UNCHANGED if channels == 4 else cv2.IMREAD_COLOR
+    frame = cv2.imdecode(np.frombuffer(blob, np.uint8), flag)
+    if frame is None:
+        from PIL import Image
+
+        with Image.open(io.BytesIO(blob)) as img:
+            if channels == 1:
+                return np.asarray(img.convert("L"))[..., None]
+            return np.asarray(img.convert("RGBA" if channels == 4 else "RGB"))
+    if channels == 1:
+        return frame[..., None]
+    if frame.ndim == 2:  # a grey JPEG read in colour mode by a reader that did not record channels
+        return np.repeat(frame[..., None], 3, axis=-1)
+    return cv2.cvtColor(frame, cv2.COLOR_BGRA2RGBA if frame.shape[-1] == 4 else cv2.COLOR_BGR2RGB)
 
 
 class LanceDataset(Dataset):
