@@ -23,6 +23,28 @@ MODULE_PATHS: dict[str, tuple[str, str, tuple[str, ...]]] = {
     "stable_worldmodel.wrappers": ("seed 000", "stable_worldmodel.wrapper", ("MegaWrapper", "EverythingToInfoWrapper")),
     "stable_worldmodel.envs.ogbench_cube": ("0.0.3", "stable_worldmodel.envs.ogbench.cube_env", ("CubeEnv",)),
     "stable_worldmodel.envs.ogbench_scene": ("0.0.3", "stable_worldmodel.envs.ogbench.scene_env", ("SceneEnv",)),
+    "stable_worldmodel.envs.ogbench_manip": (
+        "0.0.3",
+        "stable_worldmodel.envs.ogbench",
+        ("CubeEnv", "SceneEnv", "ExpertPolicy"),
+    ),
+    "stable_worldmodel.envs.ogbench_manip.cube_env": ("0.0.3", "stable_worldmodel.envs.ogbench.cube_env", ("CubeEnv",)),
+    "stable_worldmodel.envs.ogbench_manip.scene_env": (
+        "0.0.3",
+        "stable_worldmodel.envs.ogbench.scene_env",
+        ("SceneEnv",),
+    ),
+    "stable_worldmodel.envs.ogbench_manip.expert_policy": (
+        "0.0.3",
+        "stable_worldmodel.envs.ogbench.expert_policy",
+        ("ExpertPolicy",),
+    ),
+    # 0.0.3's own path (the env lives there; its module env.py holds the class and ellers_maze)
+    "stable_worldmodel.envs.simple_nav": (
+        "0.0.3",
+        "stable_worldmodel.envs.simple_nav.env",
+        ("SimpleNavigationEnv", "ellers_maze"),
+    ),
     "stable_worldmodel.envs.dmcontrol.expert_policy": (
         "0.1.1",
         "stable_worldmodel.envs.dmcontrol.expert",

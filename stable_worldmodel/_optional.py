@@ -19,9 +19,11 @@ EXTRAS = {
     "dm_control": "mujoco",
     "ogbench": "mujoco",
     "ray": "ray",
+    "minigrid": "minigrid",
+    "lance": "lance",
 }
 #: env tag -> the modules its extra installs (``swm envs`` marks envs whose extra is missing)
-EXTRA_MODULES = {"mujoco": ("mujoco", "dm_control", "ogbench")}
+EXTRA_MODULES = {"mujoco": ("mujoco", "dm_control", "ogbench"), "minigrid": ("minigrid",)}
 
 
 def missing_extra(tags) -> str | None:

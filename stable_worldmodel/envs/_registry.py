@@ -114,6 +114,15 @@ BUILTIN: tuple[EnvEntry, ...] = (
         f"{_P}.voidrun.expert:VoidRunExpert",
         max_episode_steps=100,
     ),
+    # release 0.0.3's MiniGrid maze (extra "minigrid"): no TimeLimit of its own, as 0.0.3 (the tools cut at
+    # MiniGrid's 100 steps)
+    EnvEntry(
+        "swm/SimpleNavigation-v0",
+        f"{_P}.simple_nav.env:SimpleNavigationEnv",
+        ("discrete", "minigrid"),
+        f"{_P}.simple_nav.expert:SimpleNavigationExpert",
+        tool_steps=100,
+    ),
     # MuJoCo (extra "mujoco"): no TimeLimit of their own, as upstream; the tools cut at OGBench's /
     # dm_control's episode lengths
     EnvEntry(

@@ -47,9 +47,11 @@ Deliberate differences from upstream 0.1.1:
 - The constructor's ``seed`` seeds the first reset (upstream ignores it for resets);
   ``environment_kwargs`` takes ``control_timestep``, ``n_sub_steps``, ``time_limit`` and
   ``flat_observation`` and applies them (upstream stores them unused, or fails).
-- Only dm_control's own tasks of each domain (upstream adds custom Cheetah, Hopper and Walker
-  goals and a Reacher ``qpos_match`` task with ``set_target_qpos``); every id's default task is
-  the same. Cartpole and Acrobot also take a keyword-only ``task``.
+- dm_control's own tasks of each domain, plus two of upstream's custom goals: Cheetah
+  ``run-backward`` and Hopper ``hop-backward`` (same rewards as upstream). Upstream's other
+  custom Cheetah, Hopper and Walker goals and its Reacher ``qpos_match`` task (with
+  ``set_target_qpos``) are not offered; every id's default task is the same. Cartpole and
+  Acrobot also take a keyword-only ``task``.
 - Frames are drawn at the requested size (upstream draws 224 x 224 and the World resizes);
   ``render_quality="medium"`` (the default) uses a smaller shadow map, ``"high"`` draws
   upstream's frames exactly.

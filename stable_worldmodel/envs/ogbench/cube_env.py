@@ -53,8 +53,15 @@ Deliberate differences from upstream 0.1.1:
   ``proprio`` column (:mod:`.infokeys`). Infos add ``goal`` / ``state`` / ``proprio`` /
   ``goal_state`` / ``goal_proprio`` and ``privileged.target_block_<i>_pos`` / ``_yaw`` (for the
   expert).
-- ``render_mode`` defaults to ``'rgb_array'``; ``set_new_target()`` draws a new goal mid-episode
-  (OGBench's needs its data-collection mode); ``mode`` other than ``'task'`` is refused.
+- ``render_mode`` defaults to ``'rgb_array'``; ``set_new_target()`` also works in ``mode='task'``
+  (a new goal scene mid-episode; OGBench's needs its data-collection mode).
+- ``mode='data_collection'`` (:mod:`.manip`): the cubes start at ``cube.start_position`` (stacked
+  where positions coincide; upstream puts every cube on the floor), the arm at
+  ``agent.ee_start_position``; a cube subtask's target is ``cube.goal_position`` /
+  ``cube.goal_yaw`` of *that* cube's row (upstream: row 0 whatever the cube) and both are redrawn
+  for each new target (upstream keeps the reset's values, so a single cube gets the same target
+  again and again); a stacking target rests on the cube below by the two cubes' sizes (upstream:
+  4 cm, the default sizes). Everything is drawn from the reset seed.
 """
 
 from __future__ import annotations
@@ -123,6 +130,10 @@ class CubeEnv(ManipMixin, _OGBCubeEnv):
 
     def _state_ob_dim(self) -> int:
         return PROPRIO_DIM + 9 * self._num_cubes  # + per cube: position, quaternion, yaw cos / sin
+
+    def _draw_target(self, p_stack: float) -> None:
+        """OGBench's Cube subtask: a free cube to its goal, or onto another free cube."""
+        self._draw_cube_target(list(range(self._num_cubes)), p_stack)
 
     def _place_scene(self, which: str) -> None:
         """Arm at the effector start (random yaw) and cubes at their ``which`` ("start"/"goal") poses."""

@@ -12,6 +12,13 @@ picks the next subtask from the current infos:
   locked), then the window likewise (button 1), then the buttons still different from the goal,
   then the cube.
 
+In ``mode="data_collection"`` (the infos carry OGBench's ``privileged.target_task``), it does what
+upstream 0.1.1's expert does there: the oracle of the env's current subtask acts until done, then
+the expert asks that env for the next subtask, ``set_new_target(p_stack=p)`` (through the World's
+``call_each``, so it works in worker processes too; a policy without an env keeps the subtask),
+with ``p`` drawn per episode as upstream: 0 for one cube, ``U(0, 0.25)`` for two, ``U(0.05,
+0.35)`` for three, ``U(0.1, 0.5)`` for four, 0.5 for Scene.
+
 Noise, as OGBench's data collection (which uses ``noise=0.1``; the default 0 gives clean
 demonstrations, as the other swm experts): with probability ``p_random_action`` a uniform random
 action, otherwise the oracle's action plus Gaussian noise of std ``noise``, clipped to [-1, 1]. The
@@ -36,6 +43,9 @@ from . import infokeys
 _ORACLES = "ogbench.manipspace.oracles.markov"
 SUCCESS_DISTANCE = 0.04
 COVER_XY, COVER_Z = 0.02, 0.01  # a cube within COVER_XY (xy) and above another covers it
+STACK_P = {1: (0.0, 0.0), 2: (0.0, 0.25), 3: (0.05, 0.35), 4: (0.1, 0.5)}  # cubes -> p_stack range (upstream)
+SCENE_P_STACK = 0.5
+TARGET_TASK = "privileged/target_task"
 ARM_BOUNDS = {
     "cube": np.array([[0.25, -0.35, 0.2], [0.6, 0.35, 0.35]]),
     "scene": np.array([[0.25, -0.2, 0.2], [0.6, 0.2, 0.35]]),
@@ -88,7 +98,11 @@ class OGBenchExpert(ExpertPolicy):
             info = {infokeys.ogbench(k): np.asarray(infos[k][b])[-1] for k in names}  # OGBench's names
             if self._episode_start(infos, b):
                 self._plans[b] = {}
-            out[b] = self._noisy(self._act(self._plans[b], info, kind))
+            if TARGET_TASK in info:
+                action = self._act_collecting(b, self._plans[b], info, kind)
+            else:
+                action = self._act(self._plans[b], info, kind)
+            out[b] = self._noisy(action)
         return out
 
     @staticmethod
@@ -104,8 +118,37 @@ class OGBenchExpert(ExpertPolicy):
             if plan["task"] is None:
                 plan["oracle"] = None
                 return np.zeros(5)
-            plan["oracle"] = oracle = self._new_oracle(plan["task"], info, kind)
+            plan["oracle"] = oracle = self._make_oracle(plan["task"][0], self._oracle_info(plan["task"], info), kind)
         return np.asarray(oracle.select_action(None, self._oracle_info(plan["task"], info)), np.float64)
+
+    def _act_collecting(self, b: int, plan: dict[str, Any], info: dict[str, np.ndarray], kind: str) -> np.ndarray:
+        """Data collection: the env's own subtask; a new one from env ``b`` when the oracle is done."""
+        if plan.get("oracle") is None:
+            n_cubes = sum(1 for k in info if k.startswith("privileged/block_") and k.endswith("_pos"))
+            low, high = (SCENE_P_STACK,) * 2 if kind == "scene" else STACK_P.get(n_cubes, (SCENE_P_STACK,) * 2)
+            plan["p_stack"] = float(self.rng.uniform(low, high)) if high > low else low
+            plan["oracle"] = self._make_oracle(str(info[TARGET_TASK]), info, kind)
+        oracle = plan["oracle"]
+        action = np.asarray(oracle.select_action(None, info), np.float64)
+        if oracle.done:
+            new_info = self._next_subtask(b, plan["p_stack"])
+            if new_info is not None:
+                plan["oracle"] = self._make_oracle(str(new_info[TARGET_TASK]), new_info, kind)
+        return action
+
+    def _next_subtask(self, b: int, p_stack: float) -> dict[str, np.ndarray] | None:
+        """``set_new_target(p_stack=...)`` on env ``b``; its info with OGBench's names (None without an env)."""
+        env = self.env
+        if env is None:
+            return None
+        if callable(getattr(env, "call_each", None)):
+            reply = env.call_each("set_new_target", [()], [{"p_stack": p_stack}], env_ids=[b])[0]
+        else:
+            target = getattr(env, "unwrapped", env)
+            if not callable(getattr(target, "set_new_target", None)):
+                return None
+            reply = target.set_new_target(p_stack=p_stack)
+        return {infokeys.ogbench(k): np.asarray(v) for k, v in reply[1].items() if infokeys.is_ogbench_entry(k)}
 
     def _noisy(self, action: np.ndarray) -> np.ndarray:
         if self.p_random_action and self.rng.random() < self.p_random_action:
@@ -158,15 +201,18 @@ class OGBenchExpert(ExpertPolicy):
             out["privileged/target_button_state"] = task[2]
         return out
 
-    def _new_oracle(self, task: tuple, info: dict[str, np.ndarray], kind: str):
-        """A fresh oracle for ``task``; its final arm pose drawn from our generator (the global
-        ``np.random`` is restored after OGBench's ``reset`` draws from it)."""
+    def _make_oracle(self, name: str, info: dict[str, Any], kind: str):
+        """A fresh oracle of subtask kind ``name`` reset on ``info`` (OGBench's names, with the
+        single-target keys); its final arm pose drawn from our generator (the global ``np.random``
+        is restored after OGBench's ``reset`` draws from it)."""
+        if name not in self._oracle_cls:
+            raise ConfigError(f"OGBenchExpert has no oracle for subtask {name!r} (known: {sorted(self._oracle_cls)})")
         shim = SimpleNamespace(unwrapped=SimpleNamespace(_arm_sampling_bounds=ARM_BOUNDS[kind].copy()))
-        oracle = self._oracle_cls[task[0]](env=shim, min_norm=self.min_norm)
+        oracle = self._oracle_cls[name](env=shim, min_norm=self.min_norm)
         saved = np.random.get_state()
         try:
             np.random.seed(int(self.rng.integers(0, 2**32 - 1)))
-            oracle.reset(None, self._oracle_info(task, info))
+            oracle.reset(None, info)
         finally:
             np.random.set_state(saved)
         return oracle

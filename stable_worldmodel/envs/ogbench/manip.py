@@ -22,6 +22,19 @@
   :mod:`.infokeys`), ``qpos`` ... plus ``env_name``,
   ``target``, ``success``, ``state`` (``qpos ++ qvel`` [``++ button_states``]), ``proprio`` (the
   19 proprioceptive numbers of OGBench's observation), ``goal``, ``goal_state``, ``goal_proprio``.
+- **Data collection** (``mode="data_collection"``, as upstream 0.1.1's collection scripts use it):
+  the episode has one subtask at a time instead of a goal scene. The start scene is the factors'
+  (as in task mode); then :meth:`set_new_target` draws the first target (OGBench's rules, from
+  ``np_random``: see the envs' ``_draw_target``), and the expert (or any caller) draws the next
+  one with ``set_new_target(p_stack=...)`` when a subtask is done, each new target redrawing
+  ``cube.goal_position`` / ``cube.goal_yaw``. ``success`` (and ``terminated`` with
+  ``terminate_at_goal``) is OGBench's: the current subtask only. Infos add OGBench's
+  ``privileged.target_task`` (``"cube"``, Scene also ``"button"`` / ``"drawer"`` / ``"window"``),
+  ``privileged.target_block`` and the single-target entries (``target_block_pos`` ...);
+  ``target`` is zeros (upstream's: no goal observation); ``goal`` / ``goal_state`` /
+  ``goal_proprio`` are the current scene with the subtask done (captured at each new target).
+  Cube targets other than the subtask's are moved out of sight (z = -0.3), as OGBench.
+  ``options["goal_state"]`` is refused in this mode.
 """
 
 from __future__ import annotations
@@ -35,7 +48,7 @@ import numpy as np
 
 from ... import keys, spaces
 from ..._optional import require
-from ...errors import ConfigError, unknown_name
+from ...errors import ConfigError, did_you_mean, unknown_name
 from ..base import DatasetResetMixin, check_render_size, check_variation_option, flatten_values
 from ..mujoco_render import MjRenderer, check_render_quality, setup_gl
 from . import infokeys, meshes
@@ -52,6 +65,11 @@ XYZ_SCALE, GRIPPER_SCALE = 10.0, 3.0
 PROPRIO_DIM = 19
 SUCCESS_DISTANCE = 0.04  # OGBench's task rule: every cube within 4 cm of its target
 SETTLE_STEPS = 2
+TASK, DATA_COLLECTION = "task", "data_collection"
+MODES = (TASK, DATA_COLLECTION)
+AWAY = np.array([0.0, 0.0, -0.3])  # OGBench's place for the targets not in play (data collection)
+COVER_XY = 0.02  # OGBench: a cube within 2 cm (xy) below another is covered
+P_STACK = 0.5  # OGBench's default probability of a stacking target
 _MODELS: dict[tuple, Any] = {}  # compiled models, one per configuration (process-wide)
 _MESH_MODELS: dict[tuple, Any] = {}  # their decimated twins for drawing, per configuration and ratio
 
@@ -95,8 +113,9 @@ class ManipMixin(DatasetResetMixin):
         if render_mode not in (None, "rgb_array"):
             raise ConfigError(f"{owner} requires render_mode 'rgb_array' or None, got {render_mode!r}")
         check_render_quality(owner, render_quality)
-        if kwargs.get("mode", "task") != "task":
-            raise ConfigError(f"{owner} requires mode 'task' (goals come from the factors), got {kwargs['mode']!r}")
+        mode = kwargs.get("mode", TASK)
+        if mode not in MODES:
+            raise ConfigError(f"{owner} requires mode in {list(MODES)}, got {mode!r}.{did_you_mean(str(mode), MODES)}")
 
     def _setup(self, multiview: bool, render_quality: str, render_mode: str | None) -> None:
         self.render_quality = render_quality
@@ -234,6 +253,11 @@ class ManipMixin(DatasetResetMixin):
                 if name not in names:
                     raise unknown_name("variation factor", name, names)
         out = dict(options)
+        if self._mode == DATA_COLLECTION and out.get(keys.GOAL_STATE) is not None:
+            raise ConfigError(
+                f"{owner}.reset takes no {keys.GOAL_STATE!r} option in mode 'data_collection' "
+                "(its targets are drawn subtask by subtask); use mode 'task'"
+            )
         for key in (keys.STATE, keys.GOAL_STATE):
             if out.get(key) is not None:
                 out[key] = self._check_state(f"reset option {key!r}", out[key])
@@ -258,13 +282,19 @@ class ManipMixin(DatasetResetMixin):
         self._apply_factors()
         self._data.qpos[self._arm_joint_ids] = self._home_qpos
         mujoco.mj_kinematics(self._model, self._data)
-        self._build_goal(self._options.get(keys.GOAL_STATE))
+        if self._mode == TASK:
+            self._build_goal(self._options.get(keys.GOAL_STATE))
         start = self._options.get(keys.STATE)
         if start is None:
             self._place_scene("start")
         else:
             self._set_state_vector(start)
+        if self._mode == DATA_COLLECTION:
+            self._clear_targets()
+            self._draw_target(P_STACK)
         self._finish_placement()
+        if self._mode == DATA_COLLECTION:
+            self._capture_subtask_goal()
         self._success = False
 
     def _finish_placement(self) -> None:
@@ -295,16 +325,103 @@ class ManipMixin(DatasetResetMixin):
         }
         self._restore(saved)
 
-    def set_new_target(self, return_info: bool = True, p_stack: float = 0.5):
-        """A new goal, keeping the current state: new ``cube.goal_position`` / ``cube.goal_yaw``
-        (Scene: new button, drawer and window goals too). Returns ``(obs, info)`` when
-        ``return_info``. ``p_stack`` is OGBench's argument, unused (goals follow the layout rules)."""
+    def set_new_target(self, return_info: bool = True, p_stack: float = P_STACK):
+        """A new goal, keeping the current state; returns ``(obs, info)`` when ``return_info``.
+
+        Mode ``task``: new ``cube.goal_position`` / ``cube.goal_yaw`` (Scene: new button, drawer and
+        window goals too) and a new goal scene; ``p_stack`` is unused (goals follow the layout rules).
+        Mode ``data_collection``: the next subtask, drawn by OGBench's rules (a cube target stacks
+        on another free cube with probability ``p_stack``), the goal factors redrawn first.
+        """
+        owner = type(self).__name__
         if self._model is None:
-            raise ConfigError(f"{type(self).__name__}.set_new_target requires reset() first")
+            raise ConfigError(f"{owner}.set_new_target requires reset() first")
+        if isinstance(p_stack, bool) or not isinstance(p_stack, (int, float, np.number)) or not 0 <= p_stack <= 1:
+            raise ConfigError(f"{owner}.set_new_target requires p_stack in [0, 1], got {p_stack!r}")
         self.variation_space.update(["cube.goal_position", "cube.goal_yaw"])
-        self._build_goal()
-        self._finish_placement()
+        if self._mode == DATA_COLLECTION:
+            self._draw_target(float(p_stack))
+            self._finish_placement()
+            self._capture_subtask_goal()
+        else:
+            self._build_goal()
+            self._finish_placement()
         return (self.compute_observation(), self._info()) if return_info else None
+
+    # -- data collection ------------------------------------------------------------------------
+    def _clear_targets(self) -> None:
+        """No subtask yet: every cube target out of sight (the envs add their other targets)."""
+        self._target_block = 0
+        for mocap in self._cube_target_mocap_ids:
+            self._data.mocap_pos[mocap] = AWAY
+            self._data.mocap_quat[mocap] = (1.0, 0.0, 0.0, 0.0)
+
+    def _cube_xyz(self) -> np.ndarray:
+        return np.array([self._data.qpos[a : a + 3] for a in self._cube_qpos])
+
+    def _free_cubes(self, among: list[int]) -> list[int]:
+        """The cubes of ``among`` with no cube above them (OGBench's "top blocks")."""
+        xyz = self._cube_xyz()
+        return [
+            i
+            for i in among
+            if not any(
+                j != i and xyz[j, 2] > xyz[i, 2] and np.hypot(*(xyz[i, :2] - xyz[j, :2])) < COVER_XY
+                for j in range(self._num_cubes)
+            )
+        ]
+
+    def _draw_cube_target(self, among: list[int], p_stack: float, drawer_xyz: np.ndarray | None = None) -> None:
+        """OGBench's cube subtask: a free cube of ``among`` goes into the drawer (``drawer_xyz``,
+        when given), onto another free cube (probability ``p_stack``, two free cubes needed) or to
+        its ``cube.goal_position`` row, turned to its ``cube.goal_yaw``; other targets out of sight."""
+        rng = self.np_random
+        v = self.variation_space["cube"]
+        sizes = np.asarray(v["size"].value, np.float64)
+        free = self._free_cubes(among)
+        target = int(rng.choice(free))
+        others = [i for i in free if i != target]
+        if drawer_xyz is not None:
+            xyz = np.asarray(drawer_xyz, np.float64).copy()
+        elif len(others) >= 1 and rng.uniform() < p_stack:
+            below = int(rng.choice(others))
+            base = self._cube_xyz()[below]
+            xyz = np.array([base[0], base[1], base[2] + sizes[below] + sizes[target]])
+        else:
+            xyz = np.array([*np.asarray(v["goal_position"].value)[target], sizes[target]])
+        self._target_block = target
+        for i, mocap in enumerate(self._cube_target_mocap_ids):
+            self._data.mocap_pos[mocap] = xyz if i == target else AWAY
+            self._data.mocap_quat[mocap] = (
+                yaw_quat(np.asarray(v["goal_yaw"].value)[target]) if i == target else (1.0, 0.0, 0.0, 0.0)
+            )
+
+    def _draw_target(self, p_stack: float) -> None:
+        """Draw the next data-collection subtask (the envs define it)."""
+        raise NotImplementedError
+
+    def _complete_subtask(self) -> None:
+        """Put the scene in the state the current subtask asks for (default: the target cube on its target)."""
+        adr = self._cube_qpos[self._target_block]
+        mocap = self._cube_target_mocap_ids[self._target_block]
+        self._data.qpos[adr : adr + 3] = self._data.mocap_pos[mocap]
+        self._data.qpos[adr + 3 : adr + 7] = self._data.mocap_quat[mocap]
+        dof = self._model.jnt_dofadr[self._model.joint(f"object_joint_{self._target_block}").id]
+        self._data.qvel[dof : dof + 6] = 0.0
+
+    def _capture_subtask_goal(self) -> None:
+        """``goal`` / ``goal_state`` / ``goal_proprio``: the current scene with the subtask done."""
+        saved = self._snapshot()
+        self._complete_subtask()
+        mujoco.mj_forward(self._model, self._data)
+        ob_info = self.compute_ob_info()
+        self._goal = {
+            keys.STATE: self._state_vector(),
+            keys.PROPRIO: proprio_vector(ob_info),
+            "ob": np.zeros(self.observation_space.shape, self.observation_space.dtype),
+            "image": self.render(),
+        }
+        self._restore(saved)
 
     def _place_arm(self, pos: np.ndarray, yaw: float) -> None:
         """The arm's joints by IK for the effector at ``pos`` pointing down with ``yaw`` (OGBench's pose)."""

@@ -37,6 +37,15 @@ gripper purple whatever ``agent.color`` says); and the differences listed in
 ``privileged.target_block_0_*``, ``privileged.button_<i>_top_pos``,
 ``privileged.target_button_states``, ``privileged.target_drawer_pos`` / ``_handle_pos``,
 ``privileged.target_window_pos`` / ``_handle_pos``; OGBench's entries named with ``.``).
+
+``mode='data_collection'`` (:mod:`.manip`): the start scene as in task mode (buttons, drawer and
+window drawn as OGBench's data collection draws them); each subtask is drawn by OGBench's Scene
+rules: ``cube`` (weight 1 when a cube is outside the drawer), ``button`` (1), ``drawer`` /
+``window`` (1, or 0.25 while locked); a cube goes into the open drawer with probability 0.3,
+else to ``cube.goal_position`` / ``cube.goal_yaw``; a button subtask toggles one random button;
+a drawer / window subtask opens it when closed and closes it when open. At each reset the
+button, drawer and window targets start equal to the current scene (upstream keeps them from the
+previous episode).
 """
 
 from __future__ import annotations
@@ -60,6 +69,11 @@ LOCK_COLOR = (0.96, 0.26, 0.33)  # OGBench's red
 START, GOAL = [[0.4, -0.05]], [[0.4, 0.15]]  # defaults of cube.start_position / cube.goal_position
 HANDLES = ("drawer_handle", "window_handle")
 SLIDE_TOLERANCE = 0.04
+SUBTASKS = ("cube", "button", "drawer", "window")
+LOCKED_WEIGHT = 0.25  # OGBench: weight of a drawer / window subtask while its button locks it
+P_INTO_DRAWER, DRAWER_OPEN = 0.3, -0.12  # OGBench: a cube goes into the drawer when it is open past -0.12
+DRAWER_CLOSED, WINDOW_CLOSED = -0.08, 0.1  # OGBench: closer to closed than these counts as closed
+DRAWER_JITTER = 0.005
 
 
 class SceneEnv(ManipMixin, _OGBSceneEnv):
@@ -142,6 +156,60 @@ class SceneEnv(ManipMixin, _OGBSceneEnv):
         self._model.site("drawer_handle_center_target").pos[1] = self._target_drawer_pos
         self._model.site("window_handle_center_target").pos[0] = self._target_window_pos
         mujoco.mj_kinematics(self._model, self._data)
+
+    # -- data collection (see :mod:`.manip`) -------------------------------------------------------
+    def _set_slide_targets(self, drawer: float, window: float) -> None:
+        self._target_drawer_pos, self._target_window_pos = float(drawer), float(window)
+        self._model.site("drawer_handle_center_target").pos[1] = self._target_drawer_pos
+        self._model.site("window_handle_center_target").pos[0] = self._target_window_pos
+        mujoco.mj_kinematics(self._model, self._data)
+
+    def _clear_targets(self) -> None:
+        super()._clear_targets()
+        self._target_task, self._target_button = "cube", 0
+        self._target_button_states = self._cur_button_states.copy()
+        self._set_slide_targets(*(float(self._data.qpos[a]) for a in self._slide_qpos))
+
+    def _draw_target(self, p_stack: float) -> None:
+        """OGBench's Scene subtask (module docstring), drawn from ``np_random``."""
+        rng = self.np_random
+        drawer, window = (float(self._data.qpos[a]) for a in self._slide_qpos)
+        xyz = self._cube_xyz()
+        loose = [i for i in range(self._num_cubes) if not self._is_in_drawer(xyz[i])]
+        locked = [self._cur_button_states[k] == 0 for k in range(2)]
+        weights = np.array([1.0 if loose else 0.0, 1.0, *(LOCKED_WEIGHT if lock else 1.0 for lock in locked)])
+        task = self._target_task = str(rng.choice(SUBTASKS, p=weights / weights.sum()))
+        if task == "cube":
+            spot = None
+            if drawer < DRAWER_OPEN and rng.uniform() < P_INTO_DRAWER:
+                spot = self._drawer_center.copy()
+                spot[:2] += rng.uniform(-DRAWER_JITTER, DRAWER_JITTER, size=2)
+            self._draw_cube_target(loose, p_stack, spot)
+        elif task == "button":
+            k = self._target_button = int(rng.choice(self._num_buttons))
+            self._target_button_states[k] = (self._cur_button_states[k] + 1) % self._num_button_states
+        elif task == "drawer":
+            self._set_slide_targets(
+                DRAWER_GOALS[1] if drawer >= DRAWER_CLOSED else DRAWER_GOALS[0], self._target_window_pos
+            )
+        else:
+            self._set_slide_targets(
+                self._target_drawer_pos, WINDOW_GOALS[1] if window <= WINDOW_CLOSED else WINDOW_GOALS[0]
+            )
+        mujoco.mj_kinematics(self._model, self._data)
+
+    def _complete_subtask(self) -> None:
+        task = self._target_task
+        if task == "cube":
+            super()._complete_subtask()
+        elif task == "button":
+            k = self._target_button
+            self._cur_button_states[k] = self._target_button_states[k]
+            self._apply_button_states()
+        elif task == "drawer":
+            self._data.qpos[self._slide_qpos[0]] = self._target_drawer_pos
+        else:
+            self._data.qpos[self._slide_qpos[1]] = self._target_window_pos
 
     def _snapshot(self) -> tuple:
         return (*super()._snapshot(), self._cur_button_states.copy())
