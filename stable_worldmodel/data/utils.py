@@ -13,6 +13,7 @@ __all__ = [
     "dataset_file",
     "get_cache_dir",
     "dataset_candidates",
+    "ensure_dir_exists",
     "load_dataset",
     "resolve_dataset",
     "resolve_dataset_dir",
@@ -79,6 +80,11 @@ def get_cache_dir(
             f"got {sub_folder!r}"
         )
     return usable_dir(root / sub, f"the cache sub-folder {str(sub_folder)!r}")
+
+
+def ensure_dir_exists(path: str | os.PathLike) -> None:
+    """Create folder ``path`` and its parents when missing (upstream 0.1.1's helper)."""
+    Path(path).mkdir(parents=True, exist_ok=True)
 
 
 def _root(cache_dir: str | os.PathLike | None) -> Path:

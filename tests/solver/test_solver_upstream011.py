@@ -224,3 +224,31 @@ def test_module_paths_and_registry_names():
     icem = ICEMSolver(Bowl(), num_samples=20, topk=10, alpha=0.2, n_elite_keep=3, return_mean=True)
     assert icem.momentum == 0.2 and icem.n_keep == 3 and icem.return_mean
     assert np.isclose(GradientSolver(Bowl(), n_steps=1, grad_clip=0.5).grad_clip, 0.5)
+
+
+def test_prepare_init_action_of_011():
+    from stable_worldmodel.solver.utils import prepare_init_action
+
+    class Actor:
+        def get_action(self, info, horizon=1, prefix_actions=None):
+            t = 0 if prefix_actions is None else prefix_actions.shape[1]
+            return torch.full((2, horizon, 3), float(t + 1))
+
+    prev = torch.ones(2, 1, 3)
+    assert prepare_init_action(Bowl(), {}, None, 4, 2, 3).eq(0).all()  # no actor: zeros
+    padded = prepare_init_action(Bowl(), {}, prev, 4, 2, 3)
+    assert padded.shape == (2, 4, 3) and padded[:, 0].eq(1).all() and padded[:, 1:].eq(0).all()
+    filled = prepare_init_action(Actor(), {}, prev, 4, 2, 3)  # the actor rolls out after the given block
+    assert filled[:, 1:].eq(2).all() and filled[:, 0].eq(1).all()
+    full = torch.zeros(2, 4, 3)
+    assert prepare_init_action(Actor(), {}, full, 4, 2, 3) is full
+    with pytest.raises(ConfigError, match=r"init_action of shape \(2, t <= 4, 3\)"):
+        prepare_init_action(Bowl(), {}, torch.zeros(3, 1, 3), 4, 2, 3)
+
+
+def test_ensure_dir_exists_of_011(tmp_path):
+    from stable_worldmodel.data.utils import ensure_dir_exists
+
+    ensure_dir_exists(tmp_path / "a" / "b")
+    ensure_dir_exists(tmp_path / "a" / "b")
+    assert (tmp_path / "a" / "b").is_dir()
