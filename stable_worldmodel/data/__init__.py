@@ -40,6 +40,10 @@ _ATTRS: dict[str, str] = {
     "load_dataset": "utils",
     "ReplayBuffer": "buffer",
     "LeRobotAdapter": "lerobot",
+    "LanceDataset": "lance",
+    "LanceWriter": "lance",
+    "LanceVideoDataset": "lance_video",
+    "LanceVideoWriter": "lance_video",
     "classic_filter": "buffer",
     "resolve_dataset": "utils",
     "column_normalizer": "utils",
@@ -89,6 +93,8 @@ if TYPE_CHECKING:  # pragma: no cover
         list_worlds,
         world_info,
     )
+    from .lance import LanceDataset, LanceWriter  # noqa: F401
+    from .lance_video import LanceVideoDataset, LanceVideoWriter  # noqa: F401
     from .lerobot import LeRobotAdapter  # noqa: F401
     from .normalization import IdentityScaler, PercentileScaler, ZScoreScaler, get_scaler  # noqa: F401
     from .utils import column_normalizer, load_dataset, resolve_dataset  # noqa: F401

@@ -7,6 +7,7 @@ from . import hdf5  # noqa: F401 (imported to register the format)
 from . import video  # noqa: F401 (imported to register the format)
 from . import folder  # noqa: F401 (imported to register the format)
 from . import meta  # noqa: F401 (imported to register the format)
+from . import lance_video  # noqa: F401 (imported to register the format)
 from . import lance  # noqa: F401 (imported to register the format)
 from . import lerobot  # noqa: F401 (imported to register the format)
 

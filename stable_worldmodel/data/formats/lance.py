@@ -24,6 +24,8 @@ class Lance(Format):
     def detect(cls, path: str | os.PathLike) -> bool:
         p = Path(path)
         if p.suffix.lower() == ".lance":
+            if p.stem.endswith("_videos") and p.with_name(p.stem[: -len("_videos")] + ".lance").is_dir():
+                return False  # the videos table of a lance_video dataset, not a dataset of its own
             return p.is_dir() or not p.exists()
         return p.is_dir() and len(list(p.glob("*.lance"))) == 1
 
