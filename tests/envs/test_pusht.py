@@ -372,3 +372,20 @@ def test_resolution_alias_of_the_original_release():
     env = gym.make("swm/PushT-v1", resolution=48, disable_env_checker=True)
     env.reset(seed=0)
     assert env.render().shape == (48, 48, 3)
+
+
+def test_v1_frames_from_the_cached_static_layer_equal_fresh_ones():
+    """PushT-v1 draws its background and goal silhouette once per episode: a frame drawn from the
+    cached layer equals one drawn from scratch (the cached layer is never drawn on)."""
+    from stable_worldmodel.envs.pusht import v1_render
+
+    env = gym.make("swm/PushT-v1", render_mode="rgb_array").unwrapped
+    env.reset(seed=3)
+    v1_render._STATIC.clear()
+    first = env.render()
+    for _ in range(3):
+        env.step(env.action_space.sample())
+    cached = env.render()  # a cache hit
+    v1_render._STATIC.clear()
+    fresh = env.render()
+    assert np.array_equal(cached, fresh) and not np.array_equal(first, cached)

@@ -52,21 +52,46 @@ def _body(cv2, img, radius, polys, pose, color) -> None:
             _segment(cv2, img, pts[i], pts[(i + 1) % len(pts)], color)
 
 
+#: the static layers (background and goal silhouette) of recent episodes, by what they are drawn from
+_STATIC: dict[tuple, np.ndarray] = {}
+_STATIC_KEEP = 16
+
+
+def _static_layer(cv2, colors, goal_pose, block) -> np.ndarray:
+    """The 512-px background with the goal silhouette on it: what does not move in an episode,
+    drawn once per episode (filling a 512x512x3 canvas with numpy was half of a frame's cost)."""
+    goal_color = colors.get("goal")
+    key = (
+        tuple(int(c) for c in colors["background"]),
+        None if goal_color is None else tuple(int(c) for c in goal_color),
+        tuple(float(v) for v in np.asarray(goal_pose, np.float64)[:3]),
+        tuple(np.asarray(p, np.float64).tobytes() for p in block[1]),
+    )
+    layer = _STATIC.get(key)
+    if layer is None:
+        layer = np.empty((CANVAS, CANVAS, 3), np.uint8)
+        layer[:] = np.asarray(colors["background"], np.uint8)
+        if goal_color is not None:
+            goal = tuple(int(c) for c in goal_color)
+            for poly in block[1]:
+                cv2.fillPoly(layer, [_pix(to_world(poly, goal_pose[:2], float(goal_pose[2])))], goal)
+        if len(_STATIC) >= _STATIC_KEEP:
+            _STATIC.pop(next(iter(_STATIC)))
+        _STATIC[key] = layer
+    return layer
+
+
 def draw_v1_scene(size, colors, goal_pose, block, agent) -> np.ndarray:
     """An ``(H, W, 3)`` uint8 frame.
 
     ``colors``: dict with ``background``, ``goal`` (None: no silhouette), ``block``, ``agent``.
     ``block`` / ``agent``: ``(radius, polygons, pose)`` with the local outline of
-    :func:`.v1_shapes.body_outline` and the pose (x, y, angle).
+    :func:`.v1_shapes.body_outline` and the pose (x, y, angle). The background and goal
+    silhouette come from a per-episode cache (:func:`_static_layer`): the same pixels, drawn once.
     """
     import cv2
 
-    img = np.empty((CANVAS, CANVAS, 3), np.uint8)
-    img[:] = np.asarray(colors["background"], np.uint8)
-    if colors.get("goal") is not None:
-        goal = tuple(int(c) for c in colors["goal"])
-        for poly in block[1]:
-            cv2.fillPoly(img, [_pix(to_world(poly, goal_pose[:2], float(goal_pose[2])))], goal)
+    img = _static_layer(cv2, colors, goal_pose, block).copy()
     _body(cv2, img, *agent, colors["agent"])
     _body(cv2, img, *block, colors["block"])
     for a, b in WALLS:
