@@ -176,3 +176,28 @@ def test_a_dataloader_with_workers_reads_a_lance_dataset(tmp_path):
     )
     out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=120)
     assert out.stdout.split() == ["spawn", "9", "9"], out.stderr[-2000:]
+
+
+def test_upstream_main_dataset_docs_lance_tab_runs_unchanged(tmp_path, monkeypatch):
+    """upstream main's docs/api/dataset.md, tab "LanceDB Format", with its local-path ``uri``
+    (object stores need credentials and a network: ``connect_kwargs`` is refused with a typed error)."""
+    monkeypatch.chdir(tmp_path)
+    with LanceWriter("./lewm_lance/lewm_pusht.lance") as w:
+        for e in range(2):
+            ep = episode(e, 12)
+            w.write_episode({**ep, keys.PROPRIO: ep[keys.STATE][:, :2].astype(np.float32)})
+    from stable_worldmodel.data import LanceDataset
+
+    dataset = LanceDataset(
+        uri="./lewm_lance/lewm_pusht.lance",
+        num_steps=4,
+        frameskip=5,
+        keys_to_load=["pixels", "action", "proprio"],
+    )
+    shared = LanceDataset(uri="./lewm_lance", table_name="lewm_pusht", num_steps=4, frameskip=5)
+    assert len(dataset) == len(shared) == 0  # 12 steps hold no 4-step clip at frameskip 5
+    dataset = LanceDataset(uri="./lewm_lance/lewm_pusht.lance", num_steps=2, frameskip=5, keys_to_load=["pixels"])
+    item = dataset[0]
+    assert len(dataset) == 2 * 3 and set(item) == {"pixels"} and item["pixels"].shape == (2, 3, 8, 8)
+    with pytest.raises(ConfigError, match="local Lance directories only.*aws_region"):
+        LanceDataset(uri="./lewm_lance/lewm_pusht.lance", connect_kwargs={"aws_region": "us-east-2"})
