@@ -71,6 +71,8 @@ class StackedWrapper(gym.Wrapper):
         """``history_size=1`` (the common case): a leading axis without copying."""
         if isinstance(value, np.ndarray):
             return value[None]
+        if isinstance(value, (np.generic, int, float, bool, complex)):
+            return np.asarray(value)[None]  # what np.stack gives, without its checks
         return stack_history([value])
 
     def _selected(self, info: dict) -> Iterable[str]:

@@ -200,3 +200,36 @@ def test_upstream_expert_name_drives_the_env_it_is_set_on(env_id, controller):
     world.set_policy(policy)
     assert type(policy._controller) is controller
     assert world.evaluate(episodes=6, seed=0)["success_rate"] == 100.0
+
+
+def _full_frame(env, agent_xy) -> np.ndarray:
+    """A frame drawn from scratch at 224 px and resized whole: no cached layer."""
+    v = env.variation_space
+    img = env._draw_static()
+    env._blend_dot(img, env.target_position, v["target"]["radius"].value, v["target"]["color"].value)
+    env._blend_dot(img, np.asarray(agent_xy, np.float32), v["agent"]["radius"].value, v["agent"]["color"].value)
+    return env._sized(img)
+
+
+# 64 and 32x56 / 128x112 take the redraw (scales 3.5, 7 x 4, 1.75 x 2); 96 resizes whole frames
+@pytest.mark.parametrize("size", [(64, 64), (32, 56), (128, 112), (96, 96), (224, 224)])
+def test_frames_redrawn_around_the_dot_equal_full_frames(size):
+    """A frame redraws only the output pixels the agent's dot reaches; the result equals resizing
+    the whole 224-px frame, bit for bit, for dots at the border, in the door, with the target
+    shown, and after the goal moves."""
+    env = TwoRoomV1Env(render_target=True)
+    env.set_render_size(size)
+    env.reset(seed=1, options={"variation": ["all"]})
+    rng = np.random.default_rng(0)
+    places = [(14.0, 14.0), (209.9, 14.0), (112.0, 112.0), (0.3, 223.7), *rng.uniform(10, 214, (12, 2))]
+    for i, xy in enumerate(places):
+        if i == 8:
+            env._set_goal_state(np.array([40.0, 180.0], np.float32))  # a new goal: the layer under the dot changes
+        env.agent_position = np.asarray(xy, np.float32)
+        np.testing.assert_array_equal(env.render(), _full_frame(env, xy))
+    v = env.variation_space
+    goal = env._draw_static()  # the goal image: the agent drawn at the target, over the target dot
+    env._blend_dot(goal, env.target_position, v["target"]["radius"].value, v["target"]["color"].value)
+    env._blend_dot(goal, env.target_position, v["agent"]["radius"].value, v["agent"]["color"].value)
+    np.testing.assert_array_equal(env._get_info()["goal"], env._sized(goal))
+    assert env._get_info()["goal"] is not env._get_info()["goal"]  # callers may write into it

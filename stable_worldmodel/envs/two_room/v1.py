@@ -29,8 +29,10 @@ models trained on upstream's TwoRoom work here unchanged:
   PIL's bilinear filter, as upstream's World does): background, door, wall and border pixels, then the agent as a
   Gaussian dot (std = ``agent.radius``, peak normalised to 1) alpha-blended in float32 and
   truncated to uint8, as upstream; the target dot only when ``render_target`` (or the
-  ``rendering.render_target`` factor) is on. The static layer is drawn once per reset and the
-  dot only where it changes a pixel, so a frame costs a fraction of upstream's.
+  ``rendering.render_target`` factor) is on. The static layer (with the target dot) is drawn and
+  resized once per goal, and a frame redraws only the output pixels the agent's dot reaches (the
+  same pixels as resizing the whole frame, for sizes whose scale from 224 is a short binary
+  fraction such as 64; other sizes resize whole frames), so a frame costs a fraction of upstream's.
 
 Deliberate differences: positions and observations are numpy float32 arrays (upstream: torch
 tensors); a reset without a seed seeds the variation space from the env's own generator (so
@@ -110,6 +112,10 @@ class TwoRoomV1Env(DatasetResetMixin, gym.Env):
         self.target_position = np.zeros(2, np.float32)
         self._target_img: np.ndarray | None = None
         self._static: np.ndarray | None = None
+        self._layer: tuple[np.ndarray, np.ndarray | None] | None = None
+        self._layer_key: tuple | None = None
+        self._target_sized: np.ndarray | None = None
+        self._target_key: tuple | None = None
         self.wall_axis, self.wall_thickness, self.num_doors = 1, self.WALL_WIDTH_DEFAULT, 1
         self.door_positions = np.zeros(MAX_DOOR, np.float32)
         self.door_sizes = np.zeros(MAX_DOOR, np.float32)
@@ -222,8 +228,31 @@ class TwoRoomV1Env(DatasetResetMixin, gym.Env):
         return self._get_obs(), 0.0, terminated, False, info
 
     def render(self) -> np.ndarray:
-        """The current frame, ``(*render_size, 3)`` uint8 (224 x 224 unless :meth:`set_render_size`)."""
-        return self._sized(self._render_frame(self.agent_position))
+        """The current frame, ``(*render_size, 3)`` uint8 (224 x 224 unless :meth:`set_render_size`).
+
+        The layer under the agent (static pixels and the target dot) is drawn and resized once per
+        goal; a frame redraws only the output pixels whose filter window the agent's dot reaches
+        (PIL's resize of that box of the 224-px frame: the same pixels as resizing all of it)."""
+        big, small = self._layers()
+        window = _resize_window(self.render_size) if small is not None else None
+        if window is None:
+            return self._sized(self._render_frame(self.agent_position))
+        v = self.variation_space
+        dot = self._dot(self.agent_position, v["agent"]["radius"].value)
+        if dot is None:
+            return small.copy()
+        (y0, y1, x0, x1), _ = dot
+        (oy0, oy1, cy0, cy1, by0, by1), (ox0, ox1, cx0, cx1, bx0, bx1) = window.rows(y0, y1), window.cols(x0, x1)
+        crop = big[cy0:cy1, cx0:cx1].copy()
+        self._blend(crop, dot, v["agent"]["color"].value, origin=(cy0, cx0))
+        from PIL import Image
+
+        out = small.copy()
+        box = (bx0 - cx0, by0 - cy0, bx1 - cx0, by1 - cy0)
+        out[oy0:oy1, ox0:ox1] = np.asarray(
+            Image.fromarray(crop).resize((ox1 - ox0, oy1 - oy0), Image.BILINEAR, box=box)
+        )
+        return out
 
     def set_render_size(self, size: tuple[int, int]) -> None:
         """Frames and the goal image at ``size`` = (H, W): drawn at 224 x 224, then resized with
@@ -301,7 +330,7 @@ class TwoRoomV1Env(DatasetResetMixin, gym.Env):
             keys.GOAL_STATE: target.copy(),
             keys.GOAL_PROPRIO: target,
             "distance_to_target": float(np.linalg.norm(self.agent_position - self.target_position)),
-            TARGET_IMAGE: self._sized(self._target_img).copy() if self._target_img is not None else None,
+            TARGET_IMAGE: self._sized_target(),
             LAYOUT: self._layout(),
         }
 
@@ -344,24 +373,48 @@ class TwoRoomV1Env(DatasetResetMixin, gym.Env):
 
     def _render_frame(self, agent_pos: np.ndarray) -> np.ndarray:
         v = self.variation_space
-        if self._static is None:
-            self._cache_params()
-            self._static = self._draw_static()
-        img = self._static.copy()
-        if bool(v["rendering"]["render_target"].value) or self.render_target_flag:
-            self._blend_dot(img, self.target_position, v["target"]["radius"].value, v["target"]["color"].value)
+        img = self._layers()[0].copy()
         self._blend_dot(img, agent_pos, v["agent"]["radius"].value, v["agent"]["color"].value)
         return img
 
-    def _blend_dot(self, img: np.ndarray, pos: np.ndarray, radius, color) -> None:
-        """Alpha-blend a Gaussian dot (std ``radius``, peak 1 on the pixel grid) into ``img`` in place."""
+    def _layers(self) -> tuple[np.ndarray, np.ndarray | None]:
+        """What lies under the agent: static pixels and the target dot when it is shown, at 224 px,
+        and resized to :attr:`render_size` (None at 224 px); redrawn when the target, the render
+        size or the static layer changes."""
+        v = self.variation_space
+        if self._static is None:
+            self._cache_params()
+            self._static = self._draw_static()
+        show_target = bool(v["rendering"]["render_target"].value) or self.render_target_flag
+        # the layer holds the static array it was drawn on: a new one (a reset) never looks the same
+        key = (self._static, self.render_size, show_target, self.target_position.tobytes())
+        if self._layer_key is None or self._layer_key[0] is not key[0] or self._layer_key[1:] != key[1:]:
+            big = self._static.copy()
+            if show_target:
+                self._blend_dot(big, self.target_position, v["target"]["radius"].value, v["target"]["color"].value)
+            small = None if self.render_size == (IMG_SIZE, IMG_SIZE) else self._sized(big)
+            self._layer, self._layer_key = (big, small), key
+        return self._layer
+
+    def _sized_target(self) -> np.ndarray | None:
+        """The goal image at :attr:`render_size`, resized once per goal."""
+        if self._target_img is None:
+            return None
+        key = (self._target_img, self.render_size)  # held, so a new goal image never looks the same
+        if self._target_key is None or self._target_key[0] is not key[0] or self._target_key[1] != key[1]:
+            self._target_sized, self._target_key = self._sized(self._target_img), key
+        return self._target_sized.copy()
+
+    def _dot(self, pos: np.ndarray, radius) -> tuple[tuple[int, int, int, int], np.ndarray] | None:
+        """A Gaussian dot (std ``radius``, peak 1 on the pixel grid) at ``pos``: its pixel bounds
+        ``(y0, y1, x0, x1)`` in the 224-px frame and its alpha there, ``(y1 - y0, x1 - x0)``."""
         std = max(1e-6, float(np.asarray(radius).item()))
         x, y = float(pos[0]), float(pos[1])
         reach = int(np.ceil(_DOT_CUTOFF_STD * std)) + 1
         x0, x1 = max(0, int(np.floor(x)) - reach), min(IMG_SIZE, int(np.floor(x)) + reach + 2)
         y0, y1 = max(0, int(np.floor(y)) - reach), min(IMG_SIZE, int(np.floor(y)) + reach + 2)
         if x0 >= x1 or y0 >= y1:
-            return
+            return None
         dx = self._ys[x0:x1] - np.float32(x)
         dy = self._ys[y0:y1] - np.float32(y)
         dist2 = dy[:, None] * dy[:, None] + dx[None, :] * dx[None, :]
@@ -370,7 +423,74 @@ class TwoRoomV1Env(DatasetResetMixin, gym.Env):
         peak = dot.max()
         if peak > 0:
             dot = dot / peak
-        alpha = np.clip(dot, 0, 1)[..., None]
-        patch = img[y0:y1, x0:x1].astype(np.float32)
-        rgb = np.asarray(color, np.float32)
-        img[y0:y1, x0:x1] = (patch * (np.float32(1.0) - alpha) + rgb * alpha).astype(np.uint8)
+        return (y0, y1, x0, x1), np.clip(dot, 0, 1)
+
+    @staticmethod
+    def _blend(img: np.ndarray, dot, color, origin: tuple[int, int] = (0, 0)) -> None:
+        """Alpha-blend ``dot`` (from :meth:`_dot`) into ``img``, whose pixel (0, 0) is the frame's
+        ``origin``, where they overlap; in float32, truncated to uint8, as upstream."""
+        (y0, y1, x0, x1), alpha = dot
+        oy, ox = origin
+        h, w = img.shape[:2]
+        ty0, ty1, tx0, tx1 = max(y0, oy), min(y1, oy + h), max(x0, ox), min(x1, ox + w)
+        if ty0 >= ty1 or tx0 >= tx1:
+            return
+        a = alpha[ty0 - y0 : ty1 - y0, tx0 - x0 : tx1 - x0]
+        keep = np.float32(1.0) - a
+        patch = img[ty0 - oy : ty1 - oy, tx0 - ox : tx1 - ox]
+        for k, c in enumerate(np.asarray(color, np.float32).reshape(3)):  # a plane at a time: 3x faster than (h, w, 3)
+            plane = patch[..., k]
+            blended = plane.astype(np.float32)
+            blended *= keep
+            blended += a * c
+            np.copyto(plane, blended, casting="unsafe")  # truncated, as astype(uint8)
+
+    def _blend_dot(self, img: np.ndarray, pos: np.ndarray, radius, color) -> None:
+        """Alpha-blend a Gaussian dot (std ``radius``, peak 1 on the pixel grid) into ``img`` in place."""
+        dot = self._dot(pos, radius)
+        if dot is not None:
+            self._blend(img, dot, color)
+
+
+class _ResizeWindow:
+    """Which output pixels of PIL's bilinear 224 -> ``size`` resize read which input pixels, for a
+    size whose scale is a short binary fraction (then a ``box`` resize of a crop computes exactly
+    the pixels of the full resize: every coordinate PIL derives is exact in float32)."""
+
+    def __init__(self, size: tuple[int, int]):
+        self.axes = [self._axis(n) for n in size]
+
+    @staticmethod
+    def _axis(n: int) -> tuple[np.ndarray, np.ndarray, float]:
+        scale = IMG_SIZE / n
+        support = max(scale, 1.0)  # the bilinear filter's support (1) times the filter scale
+        centre = (np.arange(n) + 0.5) * scale
+        lo = np.clip((centre - support + 0.5).astype(int), 0, IMG_SIZE)
+        hi = np.clip((centre + support + 0.5).astype(int), 0, IMG_SIZE)
+        return lo, hi, scale
+
+    def _span(self, axis: int, p0: int, p1: int) -> tuple[int, int, int, int, float, float]:
+        lo, hi, scale = self.axes[axis]
+        hit = np.flatnonzero((hi > p0) & (lo < p1))
+        o0, o1 = int(hit[0]), int(hit[-1]) + 1
+        return o0, o1, int(lo[o0]), int(hi[o1 - 1]), o0 * scale, o1 * scale
+
+    def rows(self, p0: int, p1: int):
+        return self._span(0, p0, p1)
+
+    def cols(self, p0: int, p1: int):
+        return self._span(1, p0, p1)
+
+
+#: resize windows by render size; None where the crop would not be exact (the full resize is used)
+_RESIZE_WINDOWS: dict[tuple[int, int], _ResizeWindow | None] = {}
+
+
+def _resize_window(size: tuple[int, int]) -> _ResizeWindow | None:
+    from fractions import Fraction
+
+    if size not in _RESIZE_WINDOWS:
+        dens = [Fraction(IMG_SIZE, n).denominator for n in size]
+        exact = size != (IMG_SIZE, IMG_SIZE) and all(d <= 256 and d & (d - 1) == 0 for d in dens)  # powers of 2
+        _RESIZE_WINDOWS[size] = _ResizeWindow(size) if exact else None
+    return _RESIZE_WINDOWS[size]
