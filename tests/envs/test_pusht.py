@@ -389,3 +389,27 @@ def test_v1_frames_from_the_cached_static_layer_equal_fresh_ones():
     v1_render._STATIC.clear()
     fresh = env.render()
     assert np.array_equal(cached, fresh) and not np.array_equal(first, cached)
+
+
+@pytest.mark.parametrize("size", [(64, 64), (128, 128), (32, 64), (16, 16)])
+def test_v1_frames_redrawn_under_the_bodies_equal_full_frames(size):
+    """At sizes dividing 512 by a power of 2, a PushT-v1 frame redraws only the canvas blocks under
+    the bodies: bit for bit the frame drawn at 512 px and resized whole, for bodies overlapping,
+    apart, under the walls and partly off the canvas."""
+    import cv2
+
+    from stable_worldmodel.envs.pusht.v1_render import draw_v1_scene
+
+    env = gym.make("swm/PushT-v1", render_mode="rgb_array").unwrapped
+    env.reset(seed=5, options={"variation": ["all"]})
+    v = env._values
+    colors = {k: v[k]["color"] for k in ("background", "goal", "block", "agent")}
+    rng = np.random.default_rng(1)
+    poses = [((256, 256, 0), (256, 256, 0.3)), ((3, 4, 0), (508, 300, 1.0)), ((520, -8, 0), (-20, 505, 2.5))]
+    poses += [((*rng.uniform(-10, 522, 2), 0), (*rng.uniform(-10, 522, 2), rng.uniform(0, 6.3))) for _ in range(20)]
+    for agent_pose, block_pose in poses:
+        agent = (*env._outlines["agent"], np.array(agent_pose, np.float64))
+        block = (*env._outlines["block"], np.array(block_pose, np.float64))
+        full = draw_v1_scene((512, 512), colors, env._goal_pose, block, agent)
+        want = cv2.resize(full, size[::-1], interpolation=cv2.INTER_LINEAR)
+        np.testing.assert_array_equal(draw_v1_scene(size, colors, env._goal_pose, block, agent), want)
