@@ -461,19 +461,24 @@ class _ResizeWindow:
         self.axes = [self._axis(n) for n in size]
 
     @staticmethod
-    def _axis(n: int) -> tuple[np.ndarray, np.ndarray, float]:
+    def _axis(n: int) -> tuple[list[int], list[int], list[int], list[int], float]:
         scale = IMG_SIZE / n
         support = max(scale, 1.0)  # the bilinear filter's support (1) times the filter scale
         centre = (np.arange(n) + 0.5) * scale
         lo = np.clip((centre - support + 0.5).astype(int), 0, IMG_SIZE)
         hi = np.clip((centre + support + 0.5).astype(int), 0, IMG_SIZE)
-        return lo, hi, scale
+        # lo and hi grow with the output index: by input pixel, the first output reading past it
+        # and one past the last output reading before it
+        first = np.searchsorted(hi, np.arange(IMG_SIZE + 1), side="right")
+        last = np.searchsorted(lo, np.arange(IMG_SIZE + 1), side="left")
+        return first.tolist(), last.tolist(), lo.tolist(), hi.tolist(), scale
 
     def _span(self, axis: int, p0: int, p1: int) -> tuple[int, int, int, int, float, float]:
-        lo, hi, scale = self.axes[axis]
-        hit = np.flatnonzero((hi > p0) & (lo < p1))
-        o0, o1 = int(hit[0]), int(hit[-1]) + 1
-        return o0, o1, int(lo[o0]), int(hi[o1 - 1]), o0 * scale, o1 * scale
+        """For the input span ``[p0, p1)``: the outputs ``[o0, o1)`` whose filter reads it, the
+        inputs ``[c0, c1)`` those outputs read, and their ``box`` bounds."""
+        first, last, lo, hi, scale = self.axes[axis]
+        o0, o1 = first[p0], last[p1]
+        return o0, o1, lo[o0], hi[o1 - 1], o0 * scale, o1 * scale
 
     def rows(self, p0: int, p1: int):
         return self._span(0, p0, p1)
