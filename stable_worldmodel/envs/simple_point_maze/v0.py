@@ -23,7 +23,8 @@ module keeps the id's original meaning, written from the observed behaviour of 0
   our ``state`` / ``proprio`` (agent position), ``goal_state`` / ``goal_proprio`` (goal
   position) and the private ``_layout`` read by the expert.
 - **Rendering**: :mod:`.v0_render` (matplotlib, 500 x 500 px native, ``set_render_size``
-  shrinks it).
+  shrinks it); matplotlib draws what does not move once per episode and each frame blends the
+  agent in (within 0.005/255 mean absolute difference of matplotlib's frames, ~50x faster).
 
 One deliberate difference: actions are cast to float32 before use, so the position stays
 float32 (0.1.1 promotes it to float64 when given float64 actions; the values agree to float32
