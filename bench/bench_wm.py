@@ -3,6 +3,7 @@ with the same weights.
 
     python bench/bench_wm.py [--peer ../peer011-venv/bin/python] [--model tiny-vit|paper] [--envs 1,10]
                              [--samples 300] [--iterations 30] [--horizon 5] [--repeats 3] [--threads 2]
+                             [--device cpu|cuda] [--precision 32|bf16]
 
 One LeWM is built and saved by ours (``save_pretrained``: weights.pt + config.json); the peer
 interpreter (upstream 0.1.1, built by ``../shared/bench/setup_peer011_venv.sh``) rebuilds the same
@@ -49,12 +50,19 @@ MODELS = {
 # ``ours`` builds with stable_worldmodel.wm.utils.load_pretrained; ``peer`` with a small
 # ``_target_`` resolver over upstream's modules (upstream needs hydra, not installed there).
 CHILD = r"""
-import functools, importlib, json, statistics, sys, time
+import contextlib, functools, importlib, json, statistics, sys, time
 import numpy as np
 import torch
 
 args = json.loads(sys.argv[1])
 torch.set_num_threads(args["threads"])
+device = torch.device(args.get("device", "cpu"))
+cuda = device.type == "cuda"
+
+
+def sync():
+    if cuda:
+        torch.cuda.synchronize()
 folder, side = args["folder"], args["side"]
 config = json.load(open(folder + "/config.json"))
 state = torch.load(folder + "/weights.pt", map_location="cpu", weights_only=True)
@@ -95,7 +103,7 @@ if side == "ours":
 else:
     model = build(config)
     model.load_state_dict(state, strict=True)
-model.eval()
+model.to(device).eval()
 import stable_worldmodel
 out = {"side": side, "module": stable_worldmodel.__file__, "torch": torch.__version__,
        "parameters": sum(p.numel() for p in model.parameters())}
@@ -105,12 +113,12 @@ h, s, iters = args["horizon"], args["samples"], args["iterations"]
 
 def images(b, t, seed):
     g = torch.Generator().manual_seed(seed)
-    return torch.randn(b, t, 3, size, size, generator=g)
+    return torch.randn(b, t, 3, size, size, generator=g).to(device)
 
 
 def info_for(b, seed):
     return {"pixels": images(b, hist, seed), "goal": images(b, hist, seed + 1),
-            "action": torch.zeros(b, hist, adim * block)}
+            "action": torch.zeros(b, hist, adim * block, device=device)}
 
 
 def expand(info, s):  # what upstream's CEM hands get_cost: every entry (B, S, ...)
@@ -125,17 +133,19 @@ def model_info(b, seed):
 # 1. equal results: the cost of one fixed batch of candidates (one env: upstream's LeWM.get_cost
 #    broadcasts its goal embedding wrongly for more than one env, so its CEM plans env by env)
 g = torch.Generator().manual_seed(7)
-cand = torch.randn(1, s, h, adim * block, generator=g)
+cand = torch.randn(1, s, h, adim * block, generator=g).to(device)
 with torch.inference_mode():
-    out["cost"] = model.get_cost(model_info(1, 0), cand.clone()).tolist()
+    out["cost"] = model.get_cost(model_info(1, 0), cand.clone()).cpu().tolist()
 
 
 def median_time(fn, repeats):
     fn()
+    sync()
     times = []
     for _ in range(repeats):
         t0 = time.perf_counter()
         fn()
+        sync()
         times.append(time.perf_counter() - t0)
     return statistics.median(times)
 
@@ -143,7 +153,7 @@ def median_time(fn, repeats):
 # 2. model time: `iterations` get_cost calls on one plan's info (encode once, as a solver does)
 out["model_ms"], out["plan_ms"] = {}, {}
 for b in args["envs"]:
-    cands = [torch.randn(b, s, h, adim * block, generator=g) for _ in range(iters)]
+    cands = [torch.randn(b, s, h, adim * block, generator=g).to(device) for _ in range(iters)]
 
     def model_only():
         with torch.inference_mode():
@@ -165,11 +175,11 @@ for b in args["envs"]:
     if side == "ours":
         from stable_worldmodel.policy import PlanConfig
         from stable_worldmodel.solver import make_solver
-        solver = make_solver("cem", model, num_samples=s, n_steps=iters, topk=30, device="cpu", seed=0)
+        solver = make_solver("cem", model, num_samples=s, n_steps=iters, topk=30, device=str(device), seed=0)
     else:
         from stable_worldmodel.policy import PlanConfig
         from stable_worldmodel.solver.cem import CEMSolver
-        solver = CEMSolver(model, batch_size=1, num_samples=s, n_steps=iters, topk=30, device="cpu", seed=0)
+        solver = CEMSolver(model, batch_size=1, num_samples=s, n_steps=iters, topk=30, device=str(device), seed=0)
     solver.configure(
         action_space=box,
         n_envs=b,
@@ -188,27 +198,35 @@ if args["train_batch"]:
     model.train()
     torch.manual_seed(0)
     bt, t = args["train_batch"], hist + 1
-    batches = [(images(bt, t, 100 + i), torch.randn(bt, t, adim * block)) for i in range(args["train_steps"] + 1)]
-    opt = torch.optim.AdamW(model.parameters(), lr=1e-4)
-    sigreg = SIGReg(num_proj=args["num_proj"])
+    batches = [(images(bt, t, 100 + i), torch.randn(bt, t, adim * block).to(device))
+               for i in range(args["train_steps"] + 1)]
+    # ours: the optimizer our Trainer builds (fused AdamW on CUDA); upstream: torch's default AdamW
+    opt = torch.optim.AdamW(model.parameters(), lr=1e-4, fused=cuda and side == "ours")
+    sigreg = SIGReg(num_proj=args["num_proj"]).to(device)
+    autocast = (torch.autocast(device.type, dtype=torch.bfloat16) if args.get("precision") == "bf16"
+                else contextlib.nullcontext())
 
     def step(batch):
         px, act = batch
-        if side == "ours":
-            loss = model.loss({"pixels": px, "action": act})["loss"]
-        else:
-            info = model.encode({"pixels": px, "action": act})
-            emb, act_emb = info["emb"], info["act_emb"]
-            pred = model.predict(emb[:, :hist], act_emb[:, :hist])
-            loss = (pred - emb[:, 1:1 + hist]).square().mean() + 0.09 * sigreg(emb.transpose(0, 1))
+        with autocast:
+            if side == "ours":
+                loss = model.loss({"pixels": px, "action": act})["loss"]
+            else:
+                info = model.encode({"pixels": px, "action": act})
+                emb, act_emb = info["emb"], info["act_emb"]
+                pred = model.predict(emb[:, :hist], act_emb[:, :hist])
+                loss = (pred - emb[:, 1:1 + hist]).square().mean() + 0.09 * sigreg(emb.transpose(0, 1))
         opt.zero_grad(set_to_none=True)
         loss.backward()
         opt.step()
 
     step(batches[0])
+    step(batches[0])
+    sync()
     t0 = time.perf_counter()
     for batch in batches[1:]:
         step(batch)
+    sync()
     out["train_samples_per_s"] = bt * args["train_steps"] / (time.perf_counter() - t0)
 print("RESULT " + json.dumps(out))
 """
@@ -241,6 +259,8 @@ def main() -> int:
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--train-batch", type=int, default=64, help="0 skips the training figure")
     parser.add_argument("--train-steps", type=int, default=10)
+    parser.add_argument("--device", default="cpu", help="cpu or cuda (both sides)")
+    parser.add_argument("--precision", choices=("32", "bf16"), default="32", help="training autocast (both sides)")
     args = parser.parse_args()
 
     sys.path.insert(0, str(HERE.parent))
@@ -271,11 +291,13 @@ def main() -> int:
             "train_batch": args.train_batch,
             "train_steps": args.train_steps,
             "num_proj": getattr(config, "sigreg_num_proj", 1024),
+            "device": args.device,
+            "precision": args.precision,
         }
         print(
             f"LeWM '{args.model}' ({config.image_size}px, embed {config.embed_dim}, predictor depth {config.depth}), "
             f"CEM {args.samples} x {args.iterations}, horizon {args.horizon} x frameskip {args.frameskip}, "
-            f"{args.threads} threads",
+            f"{args.threads} threads, {args.device}, training precision {args.precision}",
             flush=True,
         )
         ours = run_side(sys.executable, "ours", params)
@@ -284,6 +306,7 @@ def main() -> int:
             print(f"peer MISSING: {args.peer} (build it with bash ../shared/bench/setup_peer011_venv.sh)")
     if not ours:
         return 1
+    print(f"ours: {ours['module']}" + (f"; upstream: {peer['module']}" if peer else ""))
     print(f"parameters {ours['parameters']:,}" + (f" (upstream {peer['parameters']:,})" if peer else ""))
     if peer:
         import numpy as np
