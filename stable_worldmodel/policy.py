@@ -25,6 +25,7 @@ __all__ = [
     "FeedForwardPolicy",
     "PlanConfig",
     "RandomPolicy",
+    "RepeatActionPolicy",
     "Transformable",
     "WorldModelPolicy",
 ]
@@ -169,6 +170,53 @@ class RandomPolicy(BasePolicy):
         if self._uniform_box:
             return space.np_random.uniform(space.low, space.high).astype(space.dtype)
         return space.sample()
+
+
+#: second word of the repeats' seed: their stream stays apart from the inner policy's
+_REPEAT_STREAM = 0x5E9EA7
+
+
+class RepeatActionPolicy(BasePolicy):
+    """``policy``'s actions, where each env repeats its previous action with probability
+    ``repeat_prob`` (sticky actions: the collectors of upstream's datasets, e.g. TwoRoom's
+    ``ExpertPolicy(action_repeat_prob=0.05)``; a repeat may cross an episode boundary, as there).
+
+    The repeats are drawn from their own generator, seeded with ``seed`` (or the seed
+    :meth:`set_seed` gets, which is passed on to ``policy``).
+    """
+
+    def __init__(self, policy: BasePolicy, repeat_prob: float, seed: int | None = None, **kwargs: Any):
+        if isinstance(repeat_prob, bool) or not isinstance(repeat_prob, (int, float, np.number)):
+            raise ConfigError(f"RepeatActionPolicy requires repeat_prob to be a number in [0, 1], got {repeat_prob!r}")
+        if not 0.0 <= float(repeat_prob) <= 1.0:
+            raise ConfigError(f"RepeatActionPolicy requires repeat_prob in [0, 1], got {repeat_prob!r}")
+        super().__init__(**kwargs)
+        self.type = f"repeat({getattr(policy, 'type', type(policy).__name__)})"
+        self.policy, self.repeat_prob = policy, float(repeat_prob)
+        self.seed = seed if seed is not None else getattr(policy, "seed", None)
+        self.rng = np.random.default_rng(None if self.seed is None else [self.seed, _REPEAT_STREAM])
+        self._last: np.ndarray | None = None
+
+    def set_env(self, env: Any) -> None:
+        super().set_env(env)
+        self.policy.set_env(env)
+        self._last = None
+
+    def set_seed(self, seed: int | None) -> None:
+        if seed is None:
+            return
+        self.seed = seed
+        self.rng = np.random.default_rng([seed, _REPEAT_STREAM])
+        self.policy.set_seed(seed)
+        self._last = None
+
+    def get_action(self, obs: Any, **kwargs: Any) -> Any:
+        action = np.array(self.policy.get_action(obs, **kwargs), copy=True)
+        if self._last is not None and self._last.shape == action.shape and action.ndim >= 1 and self.repeat_prob > 0:
+            repeat = self.rng.random(len(action)) < self.repeat_prob
+            action[repeat] = self._last[repeat]
+        self._last = action.copy()
+        return action
 
 
 class ExpertPolicy(BasePolicy):

@@ -13,7 +13,9 @@ from .errors import int_in, output_dir, output_file, require
 EnvArg = Annotated[
     str, typer.Argument(help="Environment id, e.g. swm/TwoRoom-v2 (see `swm envs`).", metavar="ENV", show_default=False)
 ]
-PolicyOpt = Annotated[str, typer.Option("--policy", "-p", metavar="POLICY", help="Policy that acts: random or expert.")]
+PolicyOpt = Annotated[
+    str, typer.Option("--policy", "-p", metavar="POLICY", help="Policy that acts: random, expert or weak (PushT).")
+]
 NumEnvsOpt = Annotated[
     int, typer.Option("--num-envs", parser=int_in(1), metavar="K", help="Environments stepped together.")
 ]
@@ -120,12 +122,35 @@ def collect(
             show_default=False,
         ),
     ] = None,
+    repeat_prob: Annotated[
+        float | None,
+        typer.Option(
+            "--repeat-prob",
+            min=0.0,
+            max=1.0,
+            metavar="P",
+            help="Each env repeats its previous action with probability P (sticky actions, as upstream's collectors).",
+            show_default=False,
+        ),
+    ] = None,
+    dist_constraint: Annotated[
+        float | None,
+        typer.Option(
+            "--dist-constraint",
+            min=0.0,
+            metavar="D",
+            help="--policy weak: half-side of the square around the block its targets stay in (default 100).",
+            show_default=False,
+        ),
+    ] = None,
     ray: RayOpt = False,
     ray_address: RayAddressOpt = None,
 ) -> None:
     """Record EPISODES episodes of ENV into an HDF5 dataset in the cache, then show it.
 
     Example: swm collect swm/TwoRoom-v2 --episodes 20 --policy expert --name tworoom
+    (upstream's datasets: swm collect swm/PushT-v1 --policy weak; swm collect swm/TwoRoom-v1 --policy expert
+    --noise 2.0 --repeat-prob 0.05)
     (--ray: one Ray task per shard of seeds, into NAME/shard_*.h5, read as one dataset)
     """
     from ..data import dataset_info, delete_dataset
@@ -134,6 +159,7 @@ def collect(
     from ..planning.policies import (
         check_factors,
         check_policy,
+        checkpoint_run,
         make_policy,
         make_world,
         recording_noise,
@@ -145,6 +171,9 @@ def collect(
     env = resolve_env(env)
     policy = check_policy(policy)
     noise = recording_noise(policy, env, noise)
+    policy_options = {k: v for k, v in (("repeat_prob", repeat_prob), ("dist_constraint", dist_constraint)) if v}
+    if checkpoint_run(policy) is None:  # bad combinations fail before any work (a checkpoint's, before it loads)
+        make_policy(policy, env, seed=seed, noise=noise, **policy_options)
     name = name or default_dataset_name(env, policy)
     path = dataset_file(name)  # a name under the cache folder (sub-folders allowed), checked
     what = not_a_file(path)
@@ -164,6 +193,7 @@ def collect(
             overwrite,
             num_envs,
             ray_address,
+            policy_options,
         )
         return
     have = 0
@@ -178,10 +208,15 @@ def collect(
             )
     with make_world(env, num_envs=num_envs, image_size=image_size, max_steps=max_steps, seed=seed) as world:
         options = reset_options(check_factors(world, variation or []))
-        world.set_policy(make_policy(policy, env, seed=seed, noise=noise))
+        world.set_policy(make_policy(policy, env, seed=seed, noise=noise, **policy_options))
         path = world.record_dataset(name, episodes=episodes, seed=seed, options=options)
     display_dataset_info(dataset_info(name))
-    how = f" (action noise {noise:g})" if noise else ""
+    how = ", ".join(
+        f"{what} {value:g}"
+        for what, value in (("action noise", noise), ("repeat prob", repeat_prob), ("dist constraint", dist_constraint))
+        if value
+    )
+    how = f" ({how})" if how else ""
     out.print(f"Recorded {max(episodes - have, 0)} {policy} episodes{how} of {env} to {path}", soft_wrap=True)
 
 
@@ -198,6 +233,7 @@ def _collect_on_ray(
     overwrite: bool,
     num_envs: int,
     address: str | None,
+    policy_options: dict | None = None,
 ) -> None:
     """``swm collect --ray``: a sharded dataset recorded by Ray tasks (:mod:`stable_worldmodel.world.on_ray`)."""
     import sys
@@ -223,6 +259,7 @@ def _collect_on_ray(
         seed=seed,
         policy=policy,
         noise=noise,
+        policy_options=policy_options,
         image_size=image_size,
         max_steps=episode_limit(env, max_steps),
         options=options,

@@ -17,7 +17,9 @@ from ..errors import unknown_name
 if TYPE_CHECKING:
     from ..world import World
 
-POLICIES = ("random", "expert")
+POLICIES = ("random", "expert", "weak")
+#: ``WeakPolicy``'s default square half-side around the block (upstream's ``dist_constraint``)
+WEAK_DIST_CONSTRAINT = 100.0
 #: episode limit of envs registered without one
 DEFAULT_MAX_STEPS = 100
 
@@ -131,23 +133,50 @@ def _action_bound(env_id: str) -> float:
 
 
 def make_policy(
-    name: str, env_id: str, seed: int | None = None, plan: Any = None, device: str = "auto", noise: float | None = None
+    name: str,
+    env_id: str,
+    seed: int | None = None,
+    plan: Any = None,
+    device: str = "auto",
+    noise: float | None = None,
+    repeat_prob: float | None = None,
+    dist_constraint: float | None = None,
 ) -> Any:
     """A fresh batched policy: ``random`` (seeded with ``seed``), the env's scripted ``expert``
-    (with Gaussian action ``noise`` of that std, seeded, when given), ``wm:<run>`` planning
-    with checkpoint ``<run>`` (``plan``: a :class:`~stable_worldmodel.planning.learned.PlanSettings`),
-    or ``gc:<run>`` acting with the goal-conditioned policy of checkpoint ``<run>``."""
-    from ..envs import expert_policy
-    from ..policy import RandomPolicy
+    (with Gaussian action ``noise`` of that std, seeded, when given), ``weak`` (PushT's
+    block-centred random collector, ``WeakPolicy(dist_constraint)``, upstream's Push-T data),
+    ``wm:<run>`` planning with checkpoint ``<run>`` (``plan``: a
+    :class:`~stable_worldmodel.planning.learned.PlanSettings`), or ``gc:<run>`` acting with the
+    goal-conditioned policy of checkpoint ``<run>``. ``repeat_prob``: each env repeats its
+    previous action with that probability (:class:`~stable_worldmodel.policy.RepeatActionPolicy`)."""
+    from ..errors import ConfigError
 
     name = check_policy(name)
     if noise is not None and (name != "expert" or not expert_takes_noise(env_id)):
-        from ..errors import ConfigError
-
         raise ConfigError(
             f"--noise requires the expert policy of an env whose expert takes action noise, "
             f"got policy {name!r} on {env_id}"
         )
+    if dist_constraint is not None and name != "weak":
+        raise ConfigError(f"--dist-constraint requires --policy weak, got policy {name!r}")
+    if name == "weak" and "PushT" not in env_id:
+        raise ConfigError(f"--policy weak requires a PushT environment (swm/PushT-v1, ...), got {env_id}")
+    if repeat_prob and checkpoint_run(name) is not None:
+        raise ConfigError(f"--repeat-prob requires a collection policy (random, expert, weak), got {name!r}")
+    policy = _base_policy(name, env_id, seed, plan, device, noise, dist_constraint)
+    if repeat_prob:
+        from ..policy import RepeatActionPolicy
+
+        policy = RepeatActionPolicy(policy, repeat_prob, seed=seed)
+    return policy
+
+
+def _base_policy(
+    name: str, env_id: str, seed: int | None, plan: Any, device: str, noise: float | None, dist_constraint: float | None
+) -> Any:
+    from ..envs import expert_policy
+    from ..policy import RandomPolicy
+
     if name.startswith(WM_PREFIX):
         from ..planning.learned import PlanSettings, world_model_policy
 
@@ -159,6 +188,10 @@ def make_policy(
         return goal_conditioned_policy(name[len(GC_PREFIX) :], device=device)[0]
     if name == "random":
         return RandomPolicy(seed=seed)
+    if name == "weak":
+        from ..envs.pusht.weak import WeakPolicy
+
+        return WeakPolicy(WEAK_DIST_CONSTRAINT if dist_constraint is None else dist_constraint, seed=seed)
     return expert_policy(env_id) if noise is None else expert_policy(env_id, noise=noise, seed=seed)
 
 

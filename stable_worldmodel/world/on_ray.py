@@ -152,12 +152,13 @@ def _record_shard(
     max_steps: int | None,
     options: dict | None,
     cache_dir: str,
+    policy_options: dict | None = None,
 ) -> str:
     """One Ray task: record a shard with one env (resuming what a killed attempt committed)."""
     from ..planning.policies import make_policy, make_world
 
     with make_world(env_id, 1, image_size, max_steps, verbose=0) as world:
-        world.set_policy(make_policy(policy, env_id, seed=shard["seed"], noise=noise))
+        world.set_policy(make_policy(policy, env_id, seed=shard["seed"], noise=noise, **(policy_options or {})))
         path = world.record_dataset(
             f"{name}/shard_{shard['shard']:05d}",
             episodes=shard["episodes"],
@@ -190,6 +191,7 @@ def record_dataset_on_ray(
     seed: int = 0,
     policy: str = "expert",
     noise: float | None = None,
+    policy_options: dict | None = None,
     shards: int | None = None,
     image_size: int = 64,
     max_steps: int | None = None,
@@ -201,6 +203,9 @@ def record_dataset_on_ray(
     progress: bool = True,
 ) -> Path:
     """Record ``episodes`` episodes of ``env_id`` under ``policy`` as a sharded dataset, on Ray.
+
+    ``policy_options``: the other arguments of :func:`~stable_worldmodel.planning.policies.make_policy`
+    (``repeat_prob``, ``dist_constraint``).
 
     ``shards`` defaults to the cluster's CPU count (at most one per episode); a task that dies is
     retried ``max_retries`` times (each retry resumes its shard). Returns the dataset folder.
@@ -224,6 +229,7 @@ def record_dataset_on_ray(
         "seed": int(seed),
         "policy": policy,
         "noise": noise,
+        **({"policy_options": dict(policy_options)} if policy_options else {}),
         "image_size": int(image_size),
         "max_steps": max_steps,
         "options": options,
@@ -231,7 +237,10 @@ def record_dataset_on_ray(
     manifest = _manifest(folder, spec, count)
     todo = [s for s in manifest["shards"] if _shard_done(folder / f"shard_{s['shard']:05d}.h5") < s["episodes"]]
     task = ray.remote(num_cpus=1, max_retries=max_retries)(_record_shard)
-    refs = [task.remote(env_id, dataset_name, s, policy, noise, image_size, max_steps, options, cache) for s in todo]
+    refs = [
+        task.remote(env_id, dataset_name, s, policy, noise, image_size, max_steps, options, cache, policy_options)
+        for s in todo
+    ]
     _wait(
         ray, refs, progress, f"Recording {dataset_name} on Ray ({len(todo)} of {len(manifest['shards'])} shards to do)"
     )

@@ -93,6 +93,37 @@ def test_collect_noise_needs_an_expert_that_takes_it(swm, error_line):
     assert list_datasets() == []
 
 
+def test_collect_with_upstreams_collectors(swm, error_line):
+    """Upstream's datasets by name: PushT's WeakPolicy (``--policy weak``, its targets kept within
+    ``--dist-constraint`` of the block) and sticky actions (``--repeat-prob``, TwoRoom's
+    ``ExpertPolicy(action_noise=2.0, action_repeat_prob=0.05)``)."""
+    push = ("swm/PushT-v1", "-n", "2", *SMALL)
+    result = swm("collect", *push, "--policy", "weak")
+    assert result.exit_code == 0, result.output
+    assert "Recorded 2 weak episodes of swm/PushT-v1" in result.stdout
+    state, action = HDF5Dataset("pusht-v1-weak").get_col_data("state"), _actions("pusht-v1-weak")
+    assert len(action) == 2 * 20 and np.abs(action).max() <= 1.0  # an episode's last row has no action (NaN)
+    tight = swm("collect", *push, "--policy", "weak", "--dist-constraint", "1", "--name", "tight")
+    assert tight.exit_code == 0 and "(dist constraint 1)" in tight.stdout
+    # a target within 1 unit of the block: the agent walks towards it, so it ends nearer than the random walk does
+    tight_state = HDF5Dataset("tight").get_col_data("state")
+    gap = lambda s: np.linalg.norm(s[:, :2] - s[:, 2:4], axis=1)[-5:].mean()  # noqa: E731
+    assert gap(tight_state) < gap(state)
+    room = ("swm/TwoRoom-v1", "--policy", "expert", "-n", "2", "--seed", "3", *SMALL)
+    sticky = swm("collect", *room, "--noise", "2.0", "--repeat-prob", "0.5", "--name", "sticky")
+    assert sticky.exit_code == 0 and "(action noise 2, repeat prob 0.5)" in sticky.stdout, sticky.output
+    acts = _actions("sticky")
+    repeats = (np.abs(np.diff(acts, axis=0)).max(axis=1) == 0).mean()
+    assert 0.3 < repeats < 0.7  # about half the steps repeat the previous action (noise 2 never repeats by itself)
+    for args, needle in (
+        (("swm/TwoRoom-v1", "--policy", "weak"), "--policy weak requires a PushT environment"),
+        (("swm/PushT-v1", "--policy", "random", "--dist-constraint", "5"), "--dist-constraint requires --policy weak"),
+    ):
+        result = swm("collect", *args, "-n", "1", "--name", "bad", *SMALL)
+        assert result.exit_code == 1 and needle in error_line(result)
+    assert "bad" not in list_datasets()
+
+
 @pytest.mark.parametrize(
     ("args", "needles"),
     [
