@@ -14,7 +14,40 @@ from ..errors import ConfigError
 from ..planning.policies import checkpoint_run, evaluate_policy, make_policy, make_world, policy_history, reset_options
 from .stats import SuccessSummary
 
-__all__ = ["dataset_starts", "evaluate_cli"]
+__all__ = ["PROTOCOLS", "dataset_starts", "evaluate_cli", "protocol_knobs"]
+
+#: upstream's evaluation protocol (its ``scripts/plan/config/<env>.yaml`` and ``solver/cem.yaml``): 50 starts
+#: from dataset episodes, the goal 25 steps later, 50 steps to reach it, CEM 300 x 30 over 5 blocks, all 5
+#: executed before replanning, the cost of the final predicted step, no subgoals, seed 42
+_UPSTREAM = {
+    "episodes": 50,
+    "seed": 42,
+    "solver": "cem",
+    "horizon": 5,
+    "receding_horizon": 5,
+    "samples": 300,
+    "iterations": 30,
+    "cost": "final",
+    "subgoals": "none",
+    "goal_offset": 25,
+    "budget": 50,
+}
+#: env-specific knobs of upstream's configs (the others use :data:`_UPSTREAM`'s)
+_UPSTREAM_ENVS = {"swm/OGBCube-v0": {"goal_offset": 200, "budget": 400}}
+#: ``swm eval --protocol`` names
+PROTOCOLS = ("upstream",)
+#: the start pool of policies that are no run (random, expert, ...) under a protocol: the validation episodes
+#: of ``swm train``'s default split (val_fraction 0.1, seed 0), the episodes a run trained with defaults never saw
+DEFAULT_SPLIT = (0.1, 0)
+
+
+def protocol_knobs(name: str, env: str) -> dict[str, Any]:
+    """The evaluation knobs of protocol ``name`` (one of :data:`PROTOCOLS`) on ``env``."""
+    from ..errors import unknown_name
+
+    if name not in PROTOCOLS:
+        raise unknown_name("evaluation protocol", name, PROTOCOLS)
+    return {**_UPSTREAM, **_UPSTREAM_ENVS.get(env, {})}
 
 
 def dataset_starts(
@@ -84,9 +117,15 @@ def evaluate_cli(
     decoder: str | None = None,
     ray: bool = False,
     ray_address: str | None = None,
+    held_out_of: str | None = None,
+    protocol: str | None = None,
 ) -> tuple[SuccessSummary, str, dict[str, Any]]:
     """Evaluate ``policy`` and return its summary, a table title and the JSON record (``ray``:
-    the episodes spread over Ray tasks, see :func:`stable_worldmodel.world.on_ray.evaluate_on_ray`)."""
+    the episodes spread over Ray tasks, see :func:`stable_worldmodel.world.on_ray.evaluate_on_ray`).
+
+    With ``from_dataset``, episodes start from the validation episodes of run ``held_out_of`` (default: the
+    policy's own run), else, under a ``protocol``, from those of ``swm train``'s default split
+    (:data:`DEFAULT_SPLIT`), else from any episode."""
     start = time.perf_counter()
     if plan is not None and policy.startswith("wm:"):  # subgoals='auto' -> what this run gets, recorded as such
         from ..planning.learned import resolve_subgoals
@@ -136,7 +175,7 @@ def evaluate_cli(
         if from_dataset:
             pol = make_policy(policy, env, seed=seed, plan=plan, device=device)
             world.set_policy(pol)
-            pool = _held_out(policy, from_dataset)
+            pool, held_out = _start_pool(policy, from_dataset, held_out_of, protocol)
             results = _from_dataset(world, from_dataset, episodes, goal_offset, budget, seed, pool)
             title = f"{env}: {episodes} starts from {from_dataset} (goal +{goal_offset} steps, budget {budget})"
             record.update(
@@ -147,7 +186,10 @@ def evaluate_cli(
                 episodes_idx=results["episodes_idx"],
                 start_steps=results["start_steps"],
                 held_out=pool is not None,
+                start_pool=held_out,
             )
+            if protocol is not None:
+                record["protocol_name"] = protocol
         else:
             results = evaluate_policy(world, policy, episodes, seed, variation, plan=plan, device=device)
             title = f"{env}: seeds {seed}..{seed + episodes - 1}, at most {max_steps} steps"
@@ -183,6 +225,27 @@ def _finish(policy: str, results: dict, record: dict[str, Any], plan: Any, start
     if checkpoint_run(policy) is not None:
         record["model"] = _model_summary(policy)
     return summary
+
+
+def _start_pool(policy: str, dataset: str, held_out_of: str | None, protocol: str | None) -> tuple[list | None, str]:
+    """The dataset episodes an evaluation starts from, and where they come from (for the record)."""
+    source = held_out_of or policy
+    pool = _held_out(source, dataset)
+    if pool is not None:
+        return pool, f"validation episodes of {source}"
+    if held_out_of is not None:
+        raise ConfigError(
+            f"swm eval --held-out-of requires a wm:/gc: run trained on {dataset!r} whose protocol lists its "
+            f"validation episodes, got {held_out_of!r}"
+        )
+    if protocol is not None:
+        from ..data import load_dataset
+        from ..train.data import split_episodes
+
+        fraction, seed = DEFAULT_SPLIT
+        _, val = split_episodes(load_dataset(dataset).num_episodes, fraction, seed)
+        return [int(e) for e in val], f"validation episodes of swm train's default split (val {fraction}, seed {seed})"
+    return None, "all episodes"
 
 
 def _held_out(policy: str, dataset: str) -> list[int] | None:

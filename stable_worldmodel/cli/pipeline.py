@@ -274,6 +274,7 @@ def _collect_on_ray(
 
 
 def eval_cmd(
+    ctx: typer.Context,
     env: EnvArg,
     policy: Annotated[
         str,
@@ -444,6 +445,28 @@ def eval_cmd(
             show_default=False,
         ),
     ] = None,
+    protocol: Annotated[
+        str | None,
+        typer.Option(
+            "--protocol",
+            metavar="NAME",
+            help=(
+                "upstream: with --from-dataset, every knob of upstream's evaluation (50 starts, goal +25 steps, "
+                "budget 50, CEM 300 x 30, horizon 5, receding horizon 5, cost final, no subgoals, seed 42; OGBCube: "
+                "goal +200, budget 400); options you give win; starts from held-out episodes for every policy."
+            ),
+            show_default=False,
+        ),
+    ] = None,
+    held_out_of: Annotated[
+        str | None,
+        typer.Option(
+            "--held-out-of",
+            metavar="RUN",
+            help="With --from-dataset: start from the validation episodes of run RUN (wm:RUN / gc:RUN), any policy.",
+            show_default=False,
+        ),
+    ] = None,
     ray: RayOpt = False,
     ray_address: RayAddressOpt = None,
     force: ForceOpt = False,
@@ -460,6 +483,29 @@ def eval_cmd(
     from .worlds import check_run_fits
 
     env = resolve_env(env)
+    if protocol is not None:
+        from .evaluation import protocol_knobs
+
+        if from_dataset is None:
+            raise typer.BadParameter(
+                "requires --from-dataset NAME (upstream's protocol starts from dataset episodes)",
+                param_hint="--protocol",
+            )
+        knobs = protocol_knobs(protocol, env)
+        # an option left at its default takes the protocol's value (by name: typer may bring its own click)
+        chosen = {
+            k: v for k, v in knobs.items() if getattr(ctx.get_parameter_source(k), "name", "DEFAULT") == "DEFAULT"
+        }
+        if not policy.startswith("wm:"):
+            chosen.pop("subgoals", None)  # a planner's knob: the others take none
+        episodes, seed = chosen.get("episodes", episodes), chosen.get("seed", seed)
+        solver, horizon = chosen.get("solver", solver), chosen.get("horizon", horizon)
+        receding_horizon, samples = chosen.get("receding_horizon", receding_horizon), chosen.get("samples", samples)
+        iterations, cost = chosen.get("iterations", iterations), chosen.get("cost", cost)
+        subgoals, goal_offset = chosen.get("subgoals", subgoals), chosen.get("goal_offset", goal_offset)
+        budget = chosen.get("budget", budget)
+    if held_out_of is not None and from_dataset is None:
+        raise typer.BadParameter("requires --from-dataset NAME", param_hint="--held-out-of")
     if (ray or ray_address) and (video is not None or from_dataset is not None):
         raise typer.BadParameter(
             "evaluates seeded episodes: it cannot be combined with --video or --from-dataset", param_hint="--ray"
@@ -542,6 +588,8 @@ def eval_cmd(
         decoder=decoder,
         ray=ray,
         ray_address=ray_address,
+        held_out_of=held_out_of,
+        protocol=protocol,
     )
     out.print(success_table(title, [summary]))
     if record.get("videos"):

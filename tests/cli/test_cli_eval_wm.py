@@ -179,6 +179,71 @@ def test_eval_random_from_dataset_uses_every_episode(swm, home, tmp_path):
     assert not set(record["episodes_idx"]) <= set(protocol(home)["val_episodes"])
 
 
+def test_protocol_upstream_sets_every_knob_and_options_given_win(swm, home, tmp_path):
+    """``--protocol upstream`` (upstream's scripts/plan/config/pusht.yaml and solver/cem.yaml): 50 starts, seed
+    42, goal +25, budget 50, CEM 300 x 30, horizon 5, receding horizon 5, cost final, no subgoals; what the
+    user gives wins; the random floor starts from the held-out episodes of swm train's default split."""
+    from stable_worldmodel.cli.evaluation import protocol_knobs
+    from stable_worldmodel.data import HDF5Dataset
+    from stable_worldmodel.train.data import split_episodes
+
+    knobs = protocol_knobs("upstream", TOY)
+    assert knobs == {
+        "episodes": 50,
+        "seed": 42,
+        "solver": "cem",
+        "horizon": 5,
+        "receding_horizon": 5,
+        "samples": 300,
+        "iterations": 30,
+        "cost": "final",
+        "subgoals": "none",
+        "goal_offset": 25,
+        "budget": 50,
+    }
+    assert protocol_knobs("upstream", "swm/OGBCube-v0")["goal_offset"] == 200
+    out = tmp_path / "wm.json"
+    given = ("--episodes", "2", "--samples", "8", "--iterations", "1", "--goal-offset", "2", "--budget", "3")
+    args = ("eval", TOY, "--policy", f"wm:{RUN}", *SMALL, "--from-dataset", "toy", "--protocol", "upstream")
+    result = swm(*args, *given, "--json", str(out))
+    assert result.exit_code == 0, result.output
+    record = json.loads(out.read_text())
+    plan = record["plan"]
+    assert (record["protocol_name"], record["seed"], record["episodes"]) == ("upstream", 42, 2)
+    assert (record["goal_offset"], record["budget"]) == (2, 3)  # given
+    assert (plan["horizon"], plan["receding_horizon"], plan["cost"], plan["subgoals"]) == (5, 5, "final", "none")
+    assert (plan["samples"], plan["iterations"], plan["solver"]) == (8, 1, "cem")  # given, given, the protocol's
+    assert set(record["episodes_idx"]) <= set(protocol(home)["val_episodes"])  # the run's held-out episodes
+
+    floor = tmp_path / "random.json"
+    result = swm("eval", TOY, "--image-size", "16", "--from-dataset", "toy", "--protocol", "upstream",
+                 "--goal-offset", "1", "--budget", "3", "--json", str(floor))  # fmt: skip
+    assert result.exit_code == 0, result.output
+    record = json.loads(floor.read_text())
+    _, val = split_episodes(HDF5Dataset("toy", preload=False).num_episodes, 0.1, 0)
+    assert record["episodes"] == 50 and set(record["episodes_idx"]) <= set(val.tolist())
+    assert record["start_pool"].startswith("validation episodes of swm train's default split")
+    same = tmp_path / "same.json"
+    result = swm("eval", TOY, "--image-size", "16", "--from-dataset", "toy", "--protocol", "upstream",
+                 "--held-out-of", f"wm:{RUN}", "--goal-offset", "1", "--budget", "3", "--json", str(same))  # fmt: skip
+    assert result.exit_code == 0, result.output
+    assert set(json.loads(same.read_text())["episodes_idx"]) <= set(protocol(home)["val_episodes"])
+
+
+@pytest.mark.parametrize(
+    ("extra", "needle"),
+    [
+        (("--protocol", "upstream"), "--protocol: requires --from-dataset NAME"),
+        (("--from-dataset", "toy", "--protocol", "upstrem"), "Did you mean 'upstream'"),
+        (("--held-out-of", "wm:x"), "--held-out-of: requires --from-dataset NAME"),
+        (("--from-dataset", "toy", "--held-out-of", "random"), "--held-out-of requires a wm:/gc: run"),
+    ],
+)
+def test_protocol_bad_input_is_one_line(swm, home, error_line, extra, needle):
+    result = swm("eval", TOY, "--image-size", "16", "--episodes", "1", *extra)
+    assert result.exit_code in (1, 2) and needle in error_line(result), result.output  # 2: a usage error
+
+
 def test_eval_unknown_run_is_one_line_naming_where_checkpoints_are(swm, home, error_line):
     result = swm("eval", TOY, "--policy", "wm:nosuchrun", "--episodes", "1")
     assert result.exit_code == 1
