@@ -10,7 +10,8 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Any
 
-__version__ = "0.1.0"
+#: above upstream 0.1.1 (same distribution name): `pip install -U` never swaps this package for an older one
+__version__ = "0.2.0"
 
 _SUBMODULES = (
     "data",

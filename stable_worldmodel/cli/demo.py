@@ -96,8 +96,8 @@ def _write_results(
             s.label: {
                 "episodes": s.episodes,
                 "successes": s.successes,
-                "success_rate": round(s.rate, 4),
-                "ci95": [round(v, 4) for v in s.interval],
+                "success_rate": round(100 * s.rate, 2),  # percent, as swm eval --json and World.evaluate
+                "ci95": [round(100 * v, 2) for v in s.interval],
                 "mean_length": round(s.mean_length, 2),
             }
             for s in summaries

@@ -168,7 +168,7 @@ def model_type_info(name: str) -> dict[str, Any]:
         "name": name,
         "config": f"{cls.__module__}.{cls.__qualname__}",
         "summary": " ".join(doc.split()),
-        "policy": f"{cls.eval_prefix}:RUN",
+        "policy": "wm:SOURCE --video DIR --decoder RUN" if name == "frame" else f"{cls.eval_prefix}:RUN",
         "needs_reward": bool(getattr(cls, "needs_reward", False)),
         "presets": {preset: dict(values) for preset, values in cls.presets.items()},
         "fields": fields,

@@ -7,7 +7,6 @@ from typing import Annotated
 import typer
 
 from .errors import int_in
-from .pipeline import SeedOpt
 
 
 def _float_pos(value: str) -> float:
@@ -187,7 +186,15 @@ def train_cmd(
             "--name", "--run", metavar="RUN", help="Run name (default: <dataset>-<model>).", show_default=False
         ),
     ] = None,
-    seed: SeedOpt = 0,
+    seed: Annotated[
+        int,
+        typer.Option(
+            "--seed",
+            parser=int_in(0),
+            metavar="SEED",
+            help="Seed of the initial weights, the train/validation split of the episodes and the batches.",
+        ),
+    ] = 0,
     resume: Annotated[bool, typer.Option("--resume", help="Continue the run RUN from its last checkpoint.")] = False,
     frameskip: Annotated[
         int | None,
@@ -348,11 +355,11 @@ def train_cmd(
         soft_wrap=True,
     )
     prefix = get_config_class(model).eval_prefix
-    how = "plan with" if prefix == "wm" else "act with"
+    how = f"{'plan' if prefix == 'wm' else 'act'} with: swm eval ENV --policy {prefix}:{result.run}"
+    if model == "frame":
+        from ..wm.frame.config import decoder_usage
+
+        how = f"shows what {source} predicts: {decoder_usage(result.run, source)}"
     if result.features is not None:
         out.print(f"Frozen encoder: {result.features.describe()}", soft_wrap=True)
-    out.print(
-        f"Checkpoint: {result.folder} ({how}: swm eval ENV --policy {prefix}:{result.run}); "
-        f"loss curve: {result.folder / 'loss.png'}",
-        soft_wrap=True,
-    )
+    out.print(f"Checkpoint: {result.folder} ({how}); loss curve: {result.folder / 'loss.png'}", soft_wrap=True)

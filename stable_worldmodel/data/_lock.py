@@ -95,7 +95,7 @@ class WriterLock:
                 holder = "this process" if mine else holder
                 if self.busy is not None:
                     raise self.busy(holder)
-                how = "pass wait=True to wait for it" if self.timeout == 0 else f"waited {self.timeout:g} s"
+                how = "wait for it (wait=True in Python)" if self.timeout == 0 else f"waited {self.timeout:g} s"
                 raise DatasetBusyError(
                     f"{self.dataset} requires a single writer, got one already writing it: {holder}; "
                     f"let it finish or {how}"

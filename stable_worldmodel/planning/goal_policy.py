@@ -72,6 +72,13 @@ def load_run(
     opened = Run.open(run, cache_dir)
     run = opened.name
     model, protocol = opened.load_model(), opened.protocol.to_dict()
+    if not callable(getattr(model, method, None)) and opened.protocol.model == "frame":
+        from ..wm.frame.config import decoder_usage
+
+        raise ConfigError(
+            f"{'gc' if other_prefix == 'wm' else 'wm'}:{run} requires {expects}, got a frame decoder (it shows what "
+            f"another run predicts; it neither plans nor acts); use it as: {decoder_usage(run)}"
+        )
     if not callable(getattr(model, method, None)):
         raise ConfigError(
             f"{'gc' if other_prefix == 'wm' else 'wm'}:{run} requires {expects}, got a {type(model).__name__}; "

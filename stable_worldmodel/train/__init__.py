@@ -153,19 +153,22 @@ def _check_run_folder(folder: Any, resume: bool, run: str) -> bool:
 
         runs = sorted(p.name for p in folder.parent.iterdir() if p.is_dir()) if folder.parent.is_dir() else []
         raise FileNotFoundError(
-            f"train(resume=True) requires a previous run with {folder / STATE_NAME}, which does not exist."
+            f"Resuming (swm train --resume, train(resume=True)) requires a previous run with {folder / STATE_NAME}, "
+            "which does not exist."
             f"{did_you_mean(run, runs)}"
         )
     if resume:
         if has_weights:
             raise FileNotFoundError(
-                f"train(resume=True) requires {folder / STATE_NAME} to continue run {run!r}, which does not exist "
-                "(the run holds weights but no training state); train under another name"
+                f"Resuming (swm train --resume, train(resume=True)) requires {folder / STATE_NAME} to continue run "
+                f"{run!r}, which does not exist (the run holds weights but no training state); train under another "
+                "name (--name)"
             )
         logger.warning("Run %r has no checkpoint to resume (%s): starting from step 0", run, folder)
     elif has_weights or has_state:
         raise FileExistsError(
-            f"Run folder {folder} exists: pass resume=True (--resume) to continue it, or another name"
+            f"Run folder {folder} exists: continue it with swm train --resume (train(resume=True)), or pick "
+            "another name (--name)"
         )
     if folder.exists():  # killed before its first checkpoint: nothing in it is worth keeping
         logger.info("Run folder %s holds no checkpoint: reusing it", folder)

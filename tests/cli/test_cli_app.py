@@ -28,6 +28,15 @@ def test_version(swm):
     assert result.stdout.strip() == f"stable-worldmodel {swm_pkg.__version__}"
 
 
+def test_version_is_above_upstreams_and_is_the_installed_one():
+    """Same distribution name as upstream (0.1.1 on PyPI): a higher version keeps `pip install -U` from
+    swapping this package for it; the installed metadata reads the one version string."""
+    import importlib.metadata
+
+    assert tuple(int(p) for p in swm_pkg.__version__.split(".")[:3]) > (0, 1, 1)
+    assert importlib.metadata.version("stable-worldmodel") == swm_pkg.__version__
+
+
 def test_version_short_flag_and_main_return_code(capsys):
     assert cli.main(["-V"]) == 0
     assert capsys.readouterr().out.strip() == f"stable-worldmodel {swm_pkg.__version__}"

@@ -46,8 +46,8 @@ def test_demo_writes_videos_plot_results_and_one_last_line(swm, tmp_path):
     assert results["env"] == "swm/Toy-v0"
     for policy, row in results["policies"].items():
         assert row["episodes"] == 4
-        assert np.allclose(row["ci95"], wilson_interval(row["successes"], 4), atol=1e-4)
-        assert f"{100 * row['success_rate']:.1f}%" in next(
+        assert np.allclose(row["ci95"], 100 * np.asarray(wilson_interval(row["successes"], 4)), atol=1e-2)
+        assert f"{row['success_rate']:.1f}%" in next(  # percent, as swm eval --json
             line for line in stdout.splitlines() if line.startswith(f"│ {policy} ")
         )
     assert results["policies"]["expert"]["successes"] == 4

@@ -83,7 +83,14 @@ def test_eval_video_shows_the_predicted_frames(swm, fit, tmp_path):
     import av
 
     fit("lewm", "lw", steps=2)
-    assert swm("train", "frame", "--from", "lw", "--steps", "2", "--device", "cpu").exit_code == 0
+    trained = swm("train", "frame", "--from", "lw", "--steps", "2", "--device", "cpu")
+    usage = "swm eval ENV --policy wm:lw --video DIR --decoder lw-frame"
+    assert trained.exit_code == 0 and f"shows what lw predicts: {usage}" in trained.stdout, trained.output
+    for prefix in ("wm", "gc"):  # a decoder neither plans nor acts: both errors say how it is used
+        wrong = swm("eval", "swm/Toy-v0", "--policy", f"{prefix}:lw-frame", "-n", "1", "--image-size", "16")
+        assert (
+            wrong.exit_code == 1 and "got a frame decoder" in wrong.output and usage in wrong.output.replace("\n", "")
+        )
     args = [
         "eval",
         "swm/Toy-v0",

@@ -111,7 +111,7 @@ def test_an_interrupted_online_run_resumes(monkeypatch, one_torch_thread, _stabl
     from stable_worldmodel.data import HDF5Dataset
 
     assert HDF5Dataset(path=folder / "replay.h5").num_episodes == 2 + 3  # every collected episode was committed
-    with pytest.raises(FileExistsError, match="pass resume=True"):
+    with pytest.raises(FileExistsError, match=r"continue it with swm train --resume \(train\(resume=True\)\)"):
         train_online("tdmpc2", TOY, **args)
     monkeypatch.setattr(online, "_episode_stats", stats)
     result = train_online("tdmpc2", TOY, resume=True, **args)
@@ -130,5 +130,5 @@ def test_train_online_refuses_an_existing_run(_stablewm_home):
 
     (_stablewm_home / "checkpoints" / "taken").mkdir(parents=True)
     (_stablewm_home / "checkpoints" / "taken" / "weights.pt").write_bytes(b"")
-    with pytest.raises(FileExistsError, match="pass resume=True"):
+    with pytest.raises(FileExistsError, match=r"continue it with swm train --resume \(train\(resume=True\)\)"):
         train_online("tdmpc2", TOY, steps=2, name="taken", seed_episodes=1, **NET)

@@ -347,7 +347,10 @@ def test_cuda_without_a_gpu(refused):
 def test_an_existing_run_needs_resume(fit, refused):
     first = fit("dummy", "r", steps=1)
     before = (first.folder / "weights.pt").read_bytes()
-    with pytest.raises(FileExistsError, match=r"Run folder .*/checkpoints/r exists: pass resume=True \(--resume\)"):
+    with pytest.raises(
+        FileExistsError,
+        match=r"Run folder .*/checkpoints/r exists: continue it with swm train --resume \(train\(resume=True\)\)",
+    ):
         fit("dummy", "r", steps=1)
     assert (first.folder / "weights.pt").read_bytes() == before
 

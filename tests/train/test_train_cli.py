@@ -47,7 +47,7 @@ def test_a_second_run_of_that_name_needs_resume(swm, toy, error_line):
     assert first.exit_code == 0, first.output
     again = swm(*args)
     assert again.exit_code == 1
-    assert "checkpoints/r exists: pass resume=True (--resume)" in error_line(again)
+    assert "checkpoints/r exists: continue it with swm train --resume" in error_line(again)
     resumed = swm(*args, "--resume")
     assert resumed.exit_code == 0, resumed.output
     loss = re.compile(r"train loss \d+\.\d{4}, val loss \d+\.\d{4}")

@@ -12,6 +12,13 @@ from ..base import WorldModelConfig
 __all__ = ["FrameConfig"]
 
 
+def decoder_usage(run: str, source: str | None = None) -> str:
+    """How a frame decoder run is used (it decodes another run's latents; it neither plans nor acts)."""
+    if source is None:
+        source = run[: -len("-frame")] if run.endswith("-frame") else "SOURCE"
+    return f"swm eval ENV --policy wm:{source} --video DIR --decoder {run}"
+
+
 @dataclass
 class FrameConfig(WorldModelConfig):
     """``source`` (the run whose frozen encoder's latents are decoded; required) and ``width``
