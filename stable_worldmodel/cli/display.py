@@ -308,6 +308,33 @@ def names_table(title: str, names: Sequence[str], note: str | None = None) -> No
     out.print(table)
 
 
+def rows_table(title: str, columns: Sequence[str], rows: Sequence[Sequence[str]], note: str | None = None) -> None:
+    """Print ``title (count) in note`` and a table of ``rows`` under ``columns`` (first column: the names)."""
+    out = console()
+    where = f" in {note}" if note else ""
+    if not rows:
+        out.print(f"No {title.lower()}{where}.", soft_wrap=True)
+        return
+    out.print(f"[bold]{title}[/] ({len(rows)}){where}", soft_wrap=True)
+    table = Table()
+    for i, column in enumerate(columns):
+        right = column in ("episodes", "steps", "size")
+        table.add_column(column, style="cyan" if i == 0 else None, no_wrap=i == 0, justify="right" if right else "left")
+    for row in rows:
+        table.add_row(*row)
+    out.print(table)
+
+
+def human_bytes(n: int) -> str:
+    """``1536`` -> ``1.5 KiB``."""
+    size = float(n)
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB"):
+        if size < 1024 or unit == "TiB":
+            return f"{size:.0f} {unit}" if unit == "B" else f"{size:.1f} {unit}"
+        size /= 1024
+    return f"{size:.1f} TiB"  # pragma: no cover - the loop returns
+
+
 def success_table(title: str, summaries: Sequence[Any]) -> Table:
     """A table of :class:`~stable_worldmodel.cli.stats.SuccessSummary` rows: rate with its 95% Wilson interval."""
     table = Table(title=title)

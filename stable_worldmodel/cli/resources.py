@@ -236,7 +236,7 @@ def list_cmd(
     Example: swm list dataset
     """
     from ..data import get_cache_dir
-    from .display import names_table
+    from .display import names_table, rows_table
 
     kind = check_choice("kind", kind, ("model", "dataset", "world", "solver"), ALIASES)
     if kind == "solver":
@@ -244,7 +244,13 @@ def list_cmd(
         return
     note = None if kind == "world" else str(get_cache_dir())
     title = {"model": "Cached models", "dataset": "Cached datasets", "world": "Worlds"}[kind]
-    names_table(title, sorted(_lister(kind)()), note)
+    names = sorted(_lister(kind)())
+    if kind == "dataset":
+        rows_table(title, ("name", "format", "episodes", "steps", "size", "modified"), _dataset_rows(names), note)
+    elif kind == "model":
+        rows_table(title, ("name", "model", "dataset", "steps", "size", "modified"), _model_rows(names), note)
+    else:
+        names_table(title, names, note)
     if kind == "model":
         from ..wm import list_models
         from .display import console
@@ -260,6 +266,63 @@ def list_cmd(
 
         for path in leftover_partials():
             console().print(f"Unfinished first recording (no episode committed): {path}", soft_wrap=True)
+
+
+def _footprint(path: Path) -> tuple[str, str]:
+    """Bytes on disk (a file, or a folder's files) and the last modification, as printed."""
+    import datetime
+
+    from .display import human_bytes
+
+    files = [path] if path.is_file() else [p for p in path.rglob("*") if p.is_file()]
+    size = sum(p.stat().st_size for p in files)
+    newest = max((p.stat().st_mtime for p in files), default=path.stat().st_mtime)
+    return human_bytes(size), datetime.datetime.fromtimestamp(newest).strftime("%Y-%m-%d %H:%M")
+
+
+def _dataset_rows(names: list[str]) -> list[tuple[str, ...]]:
+    """``swm list dataset``: name, format, episodes, steps, size, modified (a dataset that cannot be read says so)."""
+    from ..data import dataset_info
+
+    rows = []
+    for name in names:
+        try:
+            info = dataset_info(name)
+            size, when = _footprint(Path(info["path"]))
+            rows.append((name, str(info["format"]), str(info["num_episodes"]), str(info["num_steps"]), size, when))
+        except Exception as exc:  # noqa: BLE001 - one unreadable dataset must not hide the others
+            rows.append((name, f"unreadable: {type(exc).__name__}", "", "", "", ""))
+    return rows
+
+
+def _model_rows(names: list[str]) -> list[tuple[str, ...]]:
+    """``swm list model``: name, model type, dataset, steps done (of planned: "partial" when a run
+    stopped early, "snapshot" for its ``step_<N>`` checkpoints), size, modified; a checkpoint with no
+    protocol (upstream's) shows its files' size."""
+    from ..wm.run import Run
+
+    rows = []
+    for name in names:
+        try:
+            run = Run.open(name)
+            protocol = run.protocol.to_dict()
+            done, planned = protocol.get("steps_done"), protocol.get("steps")
+            steps = "" if done is None else str(done)
+            if "/step_" in name and done is not None and planned and int(done) < int(planned):
+                steps = f"{done} of {planned} (snapshot)"
+            elif run.protocol.partial:  # stopped before its last step (killed, or still training)
+                steps = f"{done} of {planned} (partial)"
+            size, when = _footprint(run.folder)
+            rows.append(
+                (name, str(protocol.get("model") or "?"), str(protocol.get("dataset") or ""), steps, size, when)
+            )
+        except Exception:  # noqa: BLE001 - a pickled or foreign checkpoint: its file, no protocol
+            folder = _checkpoint_folder(name)
+            files = _pickled_files(name)
+            where = folder if folder is not None else (files[0] if files else None)
+            size, when = _footprint(where) if where is not None else ("", "")
+            rows.append((name, "(no protocol)", "", "", size, when))
+    return rows
 
 
 def show(

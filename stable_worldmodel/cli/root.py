@@ -79,7 +79,7 @@ app = typer.Typer(
     cls=SWMGroup,
     help="stable-worldmodel: collect datasets from worlds with factors of variation, inspect them, evaluate policies.",
     no_args_is_help=True,
-    add_completion=False,
+    add_completion=True,  # swm --install-completion [bash|zsh|fish]
     pretty_exceptions_show_locals=False,
     context_settings={"help_option_names": ["-h", "--help"]},
 )

@@ -194,3 +194,32 @@ def test_main_makes_openmp_threads_wait_passively_unless_told(monkeypatch, capsy
         monkeypatch.setenv("OMP_WAIT_POLICY", preset)
     assert cli.main(["--version"]) == 0
     assert app_module.os.environ["OMP_WAIT_POLICY"] == expected
+
+
+def test_shell_completion():
+    """``swm --install-completion`` / ``--show-completion`` (typer's): the script, and the completions it asks for."""
+    import os
+
+    script = subprocess.run(
+        [sys.executable, "-m", "stable_worldmodel.cli", "--show-completion", "bash"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert script.returncode == 0 and "_SWM_COMPLETE=complete_bash" in script.stdout, script.stderr
+
+    def complete(words: str) -> list[str]:
+        env = {
+            **os.environ,
+            "_SWM_COMPLETE": "complete_bash",
+            "COMP_WORDS": words,
+            "COMP_CWORD": str(len(words.split()) - 1),
+        }
+        out = subprocess.run(
+            [sys.executable, "-m", "stable_worldmodel.cli"], env=env, capture_output=True, text=True, timeout=60
+        )
+        assert out.returncode == 0, out.stderr
+        return out.stdout.split()
+
+    assert complete("swm co") == ["collect", "convert"]
+    assert "--policy" in complete("swm collect --pol")

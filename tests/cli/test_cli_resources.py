@@ -277,3 +277,35 @@ def test_delete_requires_names(swm, error_line):
     result = swm("delete", "dataset")
     assert result.exit_code == 2
     assert "NAMES" in error_line(result).upper()
+
+
+def test_list_shows_format_counts_size_date_and_partial_runs(swm, _stablewm_home):
+    """``swm list dataset`` / ``model``: what is in the cache at a glance (format, episodes, steps, size on disk,
+    last change; a run's model, dataset and steps done, with snapshots and runs stopped early marked)."""
+    import json
+    import re
+
+    from stable_worldmodel.train import train
+
+    assert (
+        swm("collect", "swm/Toy-v0", "-n", "2", "--max-steps", "3", "--image-size", "16", "--name", "d").exit_code == 0
+    )
+    row = next(line for line in swm("list", "dataset").stdout.splitlines() if line.startswith("│ d "))
+    cells = [c.strip() for c in row.strip("│").split("│")]
+    assert cells[:4] == ["d", "hdf5", "2", "8"] and re.fullmatch(r"[\d.]+ KiB", cells[4])
+    assert re.fullmatch(r"\d{4}-\d\d-\d\d \d\d:\d\d", cells[5])
+    train(
+        "dummy", "d", "tiny", steps=4, name="m", device="cpu", progress=False, frameskip=1, batch_size=4, ckpt_every=2
+    )
+    protocol = _stablewm_home / "checkpoints" / "m" / "protocol.json"
+    listed = {
+        c[0]: c
+        for line in swm("list", "model").stdout.splitlines()
+        if line.startswith("│ ") and (c := [x.strip() for x in line.strip("│").split("│")])
+    }
+    assert listed["m"][1:4] == ["dummy", "d", "4"]
+    assert listed["m/step_000002"][3] == "2 of 4 (snapshot)"
+    record = json.loads(protocol.read_text())
+    protocol.write_text(json.dumps({**record, "steps_done": 3, "final": None}))  # as a run killed at step 3 leaves it
+    partial = next(line for line in swm("list", "model").stdout.splitlines() if line.startswith("│ m "))
+    assert "3 of 4 (partial)" in partial

@@ -65,7 +65,8 @@ def test_collect_into_a_sub_folder_and_show_it(swm, _stablewm_home):
     result = swm("collect", "swm/Toy-v0", "--episodes", "1", "--name", "toy/shard_0", "--max-steps", "3")
     assert result.exit_code == 0, result.output
     assert (_stablewm_home / "toy" / "shard_0.h5").is_file()
-    assert "│ toy │" in swm("list", "dataset").output  # a folder of shard_*.h5 files is one (sharded) dataset
+    listed = swm("list", "dataset").output  # a folder of shard_*.h5 files is one (sharded) dataset
+    assert "│ toy  │" in listed and "toy/shard_0" not in listed
     assert swm("show", "dataset", "toy/shard_0").exit_code == 0
     assert swm("show", "dataset", "toy").exit_code == 0
 
