@@ -43,6 +43,7 @@ FLAGS = {
     "name": "--name",
     "seed": "--seed",
     "resume": "--resume",
+    "init_from": "--init-from",
     "frameskip": "--frameskip",
     "source": "--from",
 }
@@ -63,9 +64,16 @@ def _set_value(key: str, value: object) -> object:
 
     parse = _FLAG_PARSERS.get(key)
     if parse is None:
-        if key in ("model", "dataset", "preset", "device", "precision", "name", "source") and not isinstance(
-            value, str
-        ):
+        if key in (
+            "model",
+            "dataset",
+            "preset",
+            "device",
+            "precision",
+            "name",
+            "source",
+            "init_from",
+        ) and not isinstance(value, str):
             raise ConfigError(f"swm train --set {key} requires a name, got {value!r}; or use {FLAGS[key]}")
         if key == "resume" and not isinstance(value, bool):
             raise ConfigError(f"swm train --set resume requires true or false, got {value!r}; or use --resume")
@@ -195,7 +203,25 @@ def train_cmd(
             help="Seed of the initial weights, the train/validation split of the episodes and the batches.",
         ),
     ] = 0,
-    resume: Annotated[bool, typer.Option("--resume", help="Continue the run RUN from its last checkpoint.")] = False,
+    resume: Annotated[
+        bool,
+        typer.Option(
+            "--resume",
+            help=(
+                "Continue the run RUN from its last checkpoint (to its planned steps; with a larger --steps, extend "
+                "it: the learning-rate schedule becomes the new total's)."
+            ),
+        ),
+    ] = False,
+    init_from: Annotated[
+        str | None,
+        typer.Option(
+            "--init-from",
+            metavar="RUN",
+            help="Start from run RUN's weights (fine-tune; same model and sizes) instead of a fresh initialisation.",
+            show_default=False,
+        ),
+    ] = None,
     frameskip: Annotated[
         int | None,
         typer.Option(
@@ -296,6 +322,7 @@ def train_cmd(
         "name": name,
         "seed": seed,
         "resume": resume,
+        "init_from": init_from,
         "frameskip": frameskip,
         "source": source,
     }
@@ -311,6 +338,8 @@ def train_cmd(
             raise typer.BadParameter("--online takes no --dataset or --epochs", param_hint="--online")
         from ..train.online import train_online
 
+        if flags.pop("init_from") is not None:
+            raise typer.BadParameter("trains online from a fresh model: drop --init-from", param_hint="--online")
         overrides.setdefault("progress", sys.stderr.isatty())
         for key in ("epochs", "precision"):
             flags.pop(key)

@@ -56,6 +56,7 @@ def train(
     name: str | None = None,
     seed: int = 0,
     resume: bool = False,
+    init_from: str | None = None,
     cache_dir: str | None = None,
     log_every: int = 10,
     val_every: int | None = None,
@@ -73,7 +74,10 @@ def train(
     ``protocol.json`` go to ``<cache>/checkpoints/<name>/`` (default name ``<dataset>-<model>``),
     with metrics (``metrics.jsonl``, ``metrics.csv``, TensorBoard when installed) and ``loss.png``.
     ``resume=True`` continues the run of that name from its last checkpoint (same result as
-    an uninterrupted run); otherwise an existing run folder is an error. Under ``torchrun
+    an uninterrupted run) up to its planned steps, or to ``steps`` when more are given (the run
+    is extended: its learning-rate schedule becomes the one planned for the new total, from the
+    step it reached); otherwise an existing run folder is an error. ``init_from=RUN`` starts
+    from run RUN's weights (fine-tuning; same model and sizes) instead of a fresh initialisation. Under ``torchrun
     --nproc-per-node N`` the run is data-parallel over N processes (:mod:`.distributed`;
     ``batch_size`` is the global batch). A model with a frozen
     encoder (PreJEPA) trains on its features, computed once per dataset and encoder and kept on
@@ -120,6 +124,7 @@ def train(
             precision=precision,
             seed=seed,
             resume=resume,
+            init_from=init_from,
             cache_dir=cache_dir,
             log_every=log_every,
             val_every=val_every,
@@ -135,6 +140,23 @@ def train(
     finally:
         if lock is not None:
             lock.release()
+
+
+def _load_init_weights(net: Any, source: str, cache_dir: str | None) -> dict[str, Any]:
+    """Load run ``source``'s weights into ``net`` (``init_from``); what the protocol records of it."""
+    from ..wm.run import Run
+
+    opened = Run.open(source, cache_dir)
+    loaded = opened.load_model()
+    try:
+        net.load_state_dict(loaded.state_dict(), strict=True)
+    except RuntimeError as exc:
+        first = str(exc).strip().splitlines()[0]
+        raise ConfigError(
+            f"train(init_from={source!r}) requires a run of the same model and sizes, got {opened.protocol.model} "
+            f"weights that do not fit ({first})"
+        ) from exc
+    return {"run": opened.name, "weights_sha256": opened.protocol.weights_sha256}
 
 
 def _check_run_folder(folder: Any, resume: bool, run: str) -> bool:
@@ -186,6 +208,7 @@ def _train_locked(
     precision,
     seed,
     resume,
+    init_from,
     cache_dir,
     log_every,
     val_every,
@@ -213,12 +236,25 @@ def _train_locked(
     data = TrainData(dataset, cfg, seed=seed, device=dev, cache_dir=cache_dir)
     if epochs is not None:
         steps = max(1, math.ceil(epochs * data.num_train / cfg.batch_size))
+    state = load_train_state(state_path, map_location=dev) if resume else None
+    if state is not None:
+        planned = int(state.get("steps", steps or cfg.steps))
+        if steps is None:
+            steps = planned  # resume to the run's own plan
+        elif steps < planned:
+            raise ConfigError(
+                f"Resuming run {run!r} requires --steps at least its planned {planned} (extending it is allowed), "
+                f"got {steps}"
+            )
+        elif steps > planned:
+            logger.info("Extending run %r from %d to %d steps (from step %s)", run, planned, steps, state.get("step"))
     steps = steps or cfg.steps
     tree = cfg.target_tree(data.action_dim)
     torch.manual_seed(seed)
     net = wmu.instantiate(tree)
     if isinstance(cfg, DerivedFromRun):  # e.g. the frame decoder loads its source run
         cfg.prepare_model(net)
+    init = _load_init_weights(net, init_from, cache_dir) if init_from is not None and state is None else None
     features = None
     frozen = isinstance(net, HasFrozenEncoder)
     # statistics of the data (a frozen encoder's standardization, Dreamer's mean frame) are learned here, once
@@ -255,6 +291,8 @@ def _train_locked(
         **data.protocol(),
         "final": None,  # set when the run ends: a run killed mid-way shows as partial
     }
+    if init is not None:
+        protocol["init_from"] = init
     if features is not None:
         protocol["feature_cache"] = {
             "file": str(features.path),
@@ -288,12 +326,7 @@ def _train_locked(
         }
     if dist_info.is_main:
         folder.mkdir(parents=True, exist_ok=True)
-    if resume:
-        state = load_train_state(state_path, map_location=dev)
-        if int(state.get("steps", steps)) != steps:
-            raise ConfigError(
-                f"train(resume=True) requires the same number of steps as the run ({state.get('steps')}), got {steps}"
-            )
+    if state is not None:  # the trainer was built for `steps`: an extended run's schedule is the new total's
         trainer.load_state_dict(state)
     try:
         log = MetricsLog(folder, resume_step=trainer.step if resume else None) if dist_info.is_main else _NoLog()

@@ -200,8 +200,9 @@ def test_shell_completion():
     """``swm --install-completion`` / ``--show-completion`` (typer's): the script, and the completions it asks for."""
     import os
 
-    script = subprocess.run(
+    script = subprocess.run(  # typer detects the user's shell; a test process may have none to detect
         [sys.executable, "-m", "stable_worldmodel.cli", "--show-completion", "bash"],
+        env={**os.environ, "_TYPER_COMPLETE_TEST_DISABLE_SHELL_DETECTION": "1"},
         capture_output=True,
         text=True,
         timeout=60,

@@ -363,10 +363,40 @@ def test_resume_needs_a_previous_run(refused):
     )
 
 
-def test_resume_needs_the_same_number_of_steps(fit):
-    fit("dummy", "r", steps=4)
-    with pytest.raises(ConfigError, match=r"same number of steps as the run \(4\), got 6"):
+def test_resume_continues_to_the_runs_plan_and_extends_it_with_more_steps(fit, monkeypatch):
+    """No --steps: to the run's own plan (not the preset's); more steps: the run is extended, its
+    schedule the new total's from the step it reached; fewer: refused."""
+    with monkeypatch.context() as mp:
+        crash_after(mp, 5)
+        with pytest.raises(Crash):
+            fit("dummy", "r", steps=8, log_every=2, ckpt_every=4)
+    assert fit("dummy", "r", log_every=2, resume=True).steps == 8  # the run's 8, not the preset's
+    with pytest.raises(
+        ConfigError, match=r"requires --steps at least its planned 8 \(extending it is allowed\), got 6"
+    ):
         fit("dummy", "r", steps=6, resume=True)
+    longer = fit("dummy", "r", steps=12, log_every=2, resume=True)
+    folder = longer.folder
+    assert longer.steps == 12 and json.loads((folder / "protocol.json").read_text())["steps_done"] == 12
+    state = torch.load(folder / "train_state.ckpt", weights_only=True)
+    assert state["steps"] == 12 and state["step"] == 12
+    assert [s for s, _ in train_losses(folder)] == [2, 4, 6, 8, 10, 12]  # one log per step, 9..12 appended
+
+
+def test_init_from_starts_from_a_runs_weights(fit):
+    source = fit("lewm", "src", steps=3)
+    tuned = fit("lewm", "tuned", steps=1, lr=1e-12, init_from="src")  # a step too small to move the weights far
+    src, new = weights(source.folder / "weights.pt"), weights(tuned.folder / "weights.pt")
+    learned = [k for k in src if "running_" not in k and "num_batches" not in k]  # BatchNorm statistics move anyway
+    assert all(torch.allclose(src[k].float(), new[k].float(), atol=1e-5) for k in learned)
+    fresh = weights(fit("lewm", "fresh", steps=1, lr=1e-12).folder / "weights.pt")
+    assert not all(torch.allclose(src[k].float(), fresh[k].float(), atol=1e-5) for k in learned)
+    recorded = json.loads((tuned.folder / "protocol.json").read_text())["init_from"]
+    assert recorded["run"] == "src" and len(recorded["weights_sha256"]) == 64
+    with pytest.raises(ConfigError, match="requires a run of the same model and sizes, got lewm weights"):
+        fit("lewm", "bigger", steps=1, init_from="src", embed_dim=24)
+    with pytest.raises(FileNotFoundError, match="nosuch"):
+        fit("lewm", "x", steps=1, init_from="nosuch")
 
 
 def test_a_diverging_run_stops_at_its_next_log(fit, monkeypatch):

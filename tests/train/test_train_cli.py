@@ -41,6 +41,18 @@ def test_train_prints_the_checkpoint_and_the_rate(swm, toy, _stablewm_home):
     assert (folder / "weights.pt").is_file() and (folder / "loss.png").is_file()
 
 
+def test_init_from_and_a_resume_that_extends(swm, toy, _stablewm_home, error_line):
+    base = ("train", "dummy", "--dataset", toy, *QUICK)
+    assert swm(*base, "--steps", "3", "--name", "a").exit_code == 0
+    tuned = swm(*base, "--steps", "2", "--name", "b", "--init-from", "a")
+    assert tuned.exit_code == 0, tuned.output
+    assert json.loads((_stablewm_home / "checkpoints" / "b" / "protocol.json").read_text())["init_from"]["run"] == "a"
+    longer = swm(*base, "--steps", "5", "--name", "a", "--resume")
+    assert longer.exit_code == 0 and "Trained dummy (tiny) on toy: 5 steps" in longer.stdout, longer.output
+    online = swm("train", "tdmpc2", "--online", "swm/Toy-v0", "--init-from", "a")
+    assert online.exit_code != 0 and "drop --init-from" in error_line(online)
+
+
 def test_a_second_run_of_that_name_needs_resume(swm, toy, error_line):
     args = ("train", "dummy", "--dataset", toy, "--steps", "4", "--name", "r", *QUICK)
     first = swm(*args)
