@@ -44,6 +44,9 @@ FLAGS = {
     "seed": "--seed",
     "resume": "--resume",
     "init_from": "--init-from",
+    "eval_every": "--eval-every",
+    "eval_episodes": "--eval-episodes",
+    "eval_env": "--eval-env",
     "frameskip": "--frameskip",
     "source": "--from",
 }
@@ -55,6 +58,8 @@ _FLAG_PARSERS = {
     "frameskip": int_in(1),
     "lr": _float_pos,
     "epochs": _float_pos,
+    "eval_every": int_in(1),
+    "eval_episodes": int_in(1),
 }
 
 
@@ -213,6 +218,34 @@ def train_cmd(
             ),
         ),
     ] = False,
+    eval_every: Annotated[
+        int | None,
+        typer.Option(
+            "--eval-every",
+            parser=int_in(1),
+            metavar="K",
+            help=(
+                "Evaluate the checkpoint every K steps and at the end (success rate with its 95% CI in the metrics; "
+                "the best kept as RUN/best, for swm eval --policy wm:RUN/best)."
+            ),
+            show_default=False,
+        ),
+    ] = None,
+    eval_episodes: Annotated[
+        int,
+        typer.Option(
+            "--eval-episodes", parser=int_in(1), metavar="N", help="With --eval-every: episodes per evaluation."
+        ),
+    ] = 10,
+    eval_env: Annotated[
+        str | None,
+        typer.Option(
+            "--eval-env",
+            metavar="ENV",
+            help="With --eval-every: the env to evaluate in (default: the dataset's).",
+            show_default=False,
+        ),
+    ] = None,
     init_from: Annotated[
         str | None,
         typer.Option(
@@ -323,6 +356,9 @@ def train_cmd(
         "seed": seed,
         "resume": resume,
         "init_from": init_from,
+        "eval_every": eval_every,
+        "eval_episodes": eval_episodes,
+        "eval_env": eval_env,
         "frameskip": frameskip,
         "source": source,
     }
@@ -340,6 +376,9 @@ def train_cmd(
 
         if flags.pop("init_from") is not None:
             raise typer.BadParameter("trains online from a fresh model: drop --init-from", param_hint="--online")
+        if flags.pop("eval_every") is not None:
+            raise typer.BadParameter("logs its own collections' success: drop --eval-every", param_hint="--online")
+        flags.pop("eval_episodes"), flags.pop("eval_env")
         overrides.setdefault("progress", sys.stderr.isatty())
         for key in ("epochs", "precision"):
             flags.pop(key)
@@ -392,3 +431,13 @@ def train_cmd(
     if result.features is not None:
         out.print(f"Frozen encoder: {result.features.describe()}", soft_wrap=True)
     out.print(f"Checkpoint: {result.folder} ({how}); loss curve: {result.folder / 'loss.png'}", soft_wrap=True)
+    evals = [r for r in result.history if "eval/success_rate" in r]
+    if evals:
+        best = max(evals, key=lambda r: r["eval/success_rate"])  # the first of equals: the one kept
+        last = evals[-1]
+        out.print(
+            f"Evaluations: last {last['eval/success_rate']:.1f}% [{last['eval/ci95_low']:.1f}, "
+            f"{last['eval/ci95_high']:.1f}] at step {last['step']}; best {best['eval/success_rate']:.1f}% at step "
+            f"{best['step']} (swm eval ENV --policy wm:{result.run}/best)",
+            soft_wrap=True,
+        )

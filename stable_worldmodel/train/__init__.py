@@ -63,6 +63,10 @@ def train(
     ckpt_every: int | None = None,
     progress: bool = True,
     feature_cache: bool = True,
+    eval_every: int | None = None,
+    eval_episodes: int = 10,
+    eval_env: str | None = None,
+    eval_plan: Any = None,
     **overrides: Any,
 ) -> TrainResult:
     """Train world model ``model`` (a name of ``stable_worldmodel.wm.list_models()``) on dataset ``dataset``.
@@ -82,6 +86,12 @@ def train(
     ``batch_size`` is the global batch). A model with a frozen
     encoder (PreJEPA) trains on its features, computed once per dataset and encoder and kept on
     disk (:mod:`stable_worldmodel.train.features`; ``feature_cache=False`` encodes every batch).
+    ``eval_every=K`` evaluates the checkpoint every K steps and at the end: ``eval_episodes``
+    seeded episodes of ``eval_env`` (default: the dataset's env) planned as ``swm eval`` plans
+    (plain MPC, no subgoals; ``eval_plan``: other
+    :class:`~stable_worldmodel.planning.learned.PlanSettings`); the success rate and its 95% interval
+    are logged (``eval/...``) and the best checkpoint is kept as ``<run>/best`` (``swm eval --policy
+    wm:RUN/best``).
     """
     from .._device import resolve_device
     from ..wm import get_config
@@ -90,6 +100,8 @@ def train(
 
     _positive("steps", steps)
     _positive("batch_size", batch_size)
+    _positive("eval_every", eval_every)
+    _positive("eval_episodes", eval_episodes)
     if epochs is not None and not (isinstance(epochs, (int, float)) and epochs > 0):
         raise ConfigError(f"train requires epochs > 0, got {epochs!r}")
     if steps is not None and epochs is not None:
@@ -131,6 +143,7 @@ def train(
             ckpt_every=ckpt_every,
             progress=progress,
             feature_cache=feature_cache,
+            evaluation=(eval_every, eval_episodes, eval_env, eval_plan) if eval_every else None,
             cfg=cfg,
             dist_info=dist_info,
             dev=dev,
@@ -140,6 +153,30 @@ def train(
     finally:
         if lock is not None:
             lock.release()
+
+
+def _evaluate_checkpoint(
+    trainer: Any, *, env: str, episodes: int, seed: int, cache_dir: str | None, plan: Any = None
+) -> dict[str, Any]:
+    """Plan with the run's latest checkpoint in ``env`` (``swm eval``'s defaults, no subgoals) for
+    ``episodes`` seeded episodes; the success rate and its 95% interval, in percent."""
+    import numpy as np
+
+    from ..cli.stats import wilson_interval
+    from ..planning.learned import PlanSettings, world_model_policy
+    from ..planning.policies import episode_limit, make_world
+
+    settings = plan if plan is not None else PlanSettings(seed=seed, subgoals="none")
+    policy, protocol = world_model_policy(trainer.run, settings, device=str(trainer.device), cache_dir=cache_dir)
+    size = int(protocol.get("image_size") or 64)
+    with make_world(
+        env, num_envs=1, image_size=size, max_steps=episode_limit(env, None), seed=seed, verbose=0
+    ) as world:
+        world.set_policy(policy)
+        results = world.evaluate(episodes=episodes, seed=seed)
+    successes = int(np.asarray(results["episode_successes"], bool).sum())
+    low, high = wilson_interval(successes, episodes)
+    return {"success_rate": 100.0 * successes / episodes, "ci95": [100.0 * low, 100.0 * high], "episodes": episodes}
 
 
 def _load_init_weights(net: Any, source: str, cache_dir: str | None) -> dict[str, Any]:
@@ -215,6 +252,7 @@ def _train_locked(
     ckpt_every,
     progress,
     feature_cache,
+    evaluation,
     cfg,
     dist_info,
     dev,
@@ -326,6 +364,20 @@ def _train_locked(
         }
     if dist_info.is_main:
         folder.mkdir(parents=True, exist_ok=True)
+    if evaluation is not None:
+        every, episodes, env, plan = evaluation
+        env = env or protocol.get("env")
+        if not env:
+            raise ConfigError(
+                f"train(eval_every=...) requires an env to evaluate in: dataset {dataset!r} records none; pass eval_env"
+            )
+        from functools import partial
+
+        trainer.evaluator = partial(
+            _evaluate_checkpoint, env=env, episodes=episodes, seed=seed, cache_dir=cache_dir, plan=plan
+        )
+        trainer.eval_every = every
+        protocol["evaluation"] = {"env": env, "every": every, "episodes": episodes, "seed": seed}
     if state is not None:  # the trainer was built for `steps`: an extended run's schedule is the new total's
         trainer.load_state_dict(state)
     try:

@@ -34,6 +34,8 @@ logger = logging.getLogger(__name__)
 __all__ = ["TrainResult", "Trainer", "resolve_device"]
 
 PRECISIONS = ("32", "bf16", "16")
+#: the sub-folder of a run holding its best evaluated checkpoint (``swm eval --policy wm:RUN/best``)
+BEST_NAME = "best"
 
 
 def _param_groups(model: torch.nn.Module, lr: float, weight_decay: float, encoder_lr_scale: float) -> list[dict]:
@@ -153,6 +155,11 @@ class Trainer:
         self.step = 0
         #: called with the trainer before each training step (online training collects there)
         self.before_step: Any = None
+        #: ``evaluator(trainer) -> {"success_rate", "ci95", "episodes"}`` (percent), run every ``eval_every``
+        #: steps and at the end on the checkpoint just written; the best one is kept as ``best/``
+        self.evaluator: Any = None
+        self.eval_every = 0
+        self.best_eval: float | None = None
         self.window: list[
             Any
         ] = []  # train losses (floats or 0-d tensors) since the last log (checkpointed, for exact resume)
@@ -172,6 +179,7 @@ class Trainer:
             "rng": rng_state(self.generator),
             "steps": self.steps,
             "loss_window": [float(v) for v in self.window],
+            "best_eval": self.best_eval,
         }
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
@@ -181,6 +189,7 @@ class Trainer:
         self.scaler.load_state_dict(state["scaler"])
         self.step = int(state["step"])
         self.window = [float(v) for v in state.get("loss_window", [])]
+        self.best_eval = state.get("best_eval")
         set_rng_state(state["rng"], self.generator)
 
     def save(self, final: bool = False) -> None:
@@ -192,6 +201,31 @@ class Trainer:
             where.mkdir(parents=True, exist_ok=True)
             wmu.write_checkpoint(self.model, where, self.config_tree, protocol)
         wmu._atomic_write(self.folder / STATE_NAME, wmu._write_bytes(wmu.serialize_state(self.state_dict())))
+
+    # -- evaluation during training ------------------------------------------------------------
+    def _eval_due(self) -> bool:
+        return bool(self.evaluator is not None and self.eval_every and self.step % self.eval_every == 0)
+
+    def _evaluate(self, log: MetricsLog) -> None:
+        """Evaluate the checkpoint of this step (process 0), log its success rate and keep the best as ``best/``.
+
+        The evaluation draws from torch's random streams: they are restored after it, so a run with
+        evaluations trains exactly as one without (and a resumed one as an uninterrupted one)."""
+        if not self.dist.is_main:
+            return
+        devices = [self.device] if self.device.type == "cuda" else []
+        with torch.random.fork_rng(devices=devices):
+            result = self.evaluator(self)
+        rate = float(result["success_rate"])
+        low, high = (float(v) for v in result["ci95"])
+        log.log({"step": self.step, "eval/success_rate": rate, "eval/ci95_low": low, "eval/ci95_high": high})
+        logger.info(
+            "step %d: success %.1f%% [%.1f, %.1f] on %d episodes", self.step, rate, low, high, result["episodes"]
+        )
+        if self.best_eval is None or rate > self.best_eval:
+            self.best_eval = rate
+            protocol = {**self.protocol, "steps_done": self.step, "best": {"step": self.step, **result}}
+            wmu.write_checkpoint(self.model, self.folder / BEST_NAME, self.config_tree, protocol)
 
     # -- loop --------------------------------------------------------------------------------
     def _autocast(self):
@@ -306,8 +340,13 @@ class Trainer:
                     if main:
                         log.log(record)
                     bar.set_postfix(loss=f"{last_loss:.4f}", samples_s=f"{rate:.0f}")
-                if self.ckpt_every and self.step % self.ckpt_every == 0 and self.step < self.steps:
+                saved = bool(self.ckpt_every and self.step % self.ckpt_every == 0 and self.step < self.steps)
+                if saved:
                     self.save()
+                if self._eval_due() and self.step < self.steps:
+                    if not saved:
+                        self.save()  # the evaluation plans with the checkpoint of this step
+                    self._evaluate(log)
         finally:
             bar.close()
         if val_loss is None:
@@ -317,6 +356,8 @@ class Trainer:
         seconds = time.perf_counter() - start
         self.protocol["final"] = {"train_loss": last_loss, "val_loss": val_loss}
         self.save(final=True)
+        if self.evaluator is not None and self.eval_every:
+            self._evaluate(log)
         log.close()
         records = log.read()
         if main:

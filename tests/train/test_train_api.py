@@ -449,3 +449,26 @@ def test_trains_on_a_sharded_dataset(fit, toy, _stablewm_home):
     protocol = json.loads((result.folder / "protocol.json").read_text())
     assert protocol["dataset_path"] == str(shards) and protocol["episodes"] == 2 * 10
     assert result.steps == 4 and math.isfinite(result.train_loss)
+
+
+def test_evaluation_during_training_logs_success_keeps_the_best_and_changes_no_weight(fit, toy):
+    """``eval_every``: the checkpoint of every K-th step and the last one planned with in the dataset's env;
+    success rate and 95% interval logged; the best kept as ``best/``; the random streams are restored, so the
+    weights equal a run's without evaluations."""
+    from stable_worldmodel.planning.learned import PlanSettings, world_model_policy
+
+    plain = fit("lewm", "plain", steps=4, log_every=2)
+    quick = PlanSettings(samples=8, iterations=1, horizon=2, receding_horizon=2, subgoals="none")
+    evaluated = fit("lewm", "evaluated", steps=4, log_every=2, eval_every=2, eval_episodes=2, eval_plan=quick)
+    assert_same_weights(weights(plain.folder / "weights.pt"), weights(evaluated.folder / "weights.pt"))
+    evals = [r for r in evaluated.history if "eval/success_rate" in r]
+    assert [r["step"] for r in evals] == [2, 4]
+    for r in evals:
+        assert r["eval/success_rate"] in (0.0, 50.0, 100.0)  # 2 episodes
+        assert 0.0 <= r["eval/ci95_low"] <= r["eval/success_rate"] <= r["eval/ci95_high"] <= 100.0
+    best = json.loads((evaluated.folder / "best" / "protocol.json").read_text())["best"]
+    assert best["step"] == max(evals, key=lambda r: r["eval/success_rate"])["step"]
+    assert json.loads((evaluated.folder / "protocol.json").read_text())["evaluation"]["env"] == "swm/Toy-v0"
+    world_model_policy("evaluated/best")  # swm eval --policy wm:evaluated/best plans with it
+    with pytest.raises(ConfigError, match="eval_every"):
+        fit("lewm", "bad", steps=2, eval_every=0)

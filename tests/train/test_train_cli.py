@@ -53,6 +53,19 @@ def test_init_from_and_a_resume_that_extends(swm, toy, _stablewm_home, error_lin
     assert online.exit_code != 0 and "drop --init-from" in error_line(online)
 
 
+def test_eval_every_prints_the_last_and_best_evaluation(swm, toy, _stablewm_home):
+    args = ("train", "dummy", "--dataset", toy, "--steps", "4", "--name", "e", *QUICK)
+    result = swm(*args, "--eval-every", "2", "--eval-episodes", "1")
+    assert result.exit_code == 0, result.output
+    line = result.stdout.strip().splitlines()[-1]
+    assert re.fullmatch(
+        r"Evaluations: last (0|100)\.0% \[[\d.]+, [\d.]+\] at step 4; best (0|100)\.0% at step [24] "
+        r"\(swm eval ENV --policy wm:e/best\)",
+        line,
+    ), line
+    assert (_stablewm_home / "checkpoints" / "e" / "best" / "weights.pt").is_file()
+
+
 def test_a_second_run_of_that_name_needs_resume(swm, toy, error_line):
     args = ("train", "dummy", "--dataset", toy, "--steps", "4", "--name", "r", *QUICK)
     first = swm(*args)
