@@ -63,6 +63,20 @@ _FLAG_PARSERS = {
 }
 
 
+def _resume_command(model: str, run: str) -> str:
+    """This command line with ``--resume`` (when it ran as ``swm`` / ``python -m stable_worldmodel.cli``),
+    else the shortest one that resumes run ``run``."""
+    import shlex
+    import sys
+    from pathlib import Path
+
+    argv = list(sys.argv)
+    if argv and (Path(argv[0]).name == "swm" or argv[0].endswith(("stable_worldmodel/cli/__main__.py", "-m"))):
+        args = [a for a in argv[1:] if a != "--resume"]
+        return shlex.join(["swm", *args, "--resume"])
+    return shlex.join(["swm", "train", model, "--name", run, "--resume"]) + "  (with the options of the first run)"
+
+
 def _set_value(key: str, value: object) -> object:
     """A ``--set`` value of flag ``key`` checked and converted as the flag would be."""
     from ..errors import ConfigError
@@ -412,7 +426,17 @@ def train_cmd(
         raise typer.BadParameter("requires --dataset NAME (or --from RUN for a frame decoder)", param_hint="--dataset")
     overrides.setdefault("progress", sys.stderr.isatty())
     out = console()
-    result = train(model, dataset, preset, **flags, **overrides)
+    try:
+        result = train(model, dataset, preset, **flags, **overrides)
+    except KeyboardInterrupt as exc:
+        if not hasattr(exc, "swm_run"):
+            raise
+        run, folder, step, steps, saved = exc.swm_run
+        where = f"checkpoint at step {step} saved in {folder}" if saved else f"the last checkpoint in {folder} stands"
+        sys.stderr.write(
+            f"Interrupted at step {step} of {steps}: {where}. Resume with:\n  {_resume_command(model, run)}\n"
+        )
+        raise typer.Exit(130) from None
     if os.environ.get("RANK", "0") != "0":  # torchrun: process 0 reports
         return
     val = f"{result.val_loss:.4f}" if result.val_loss is not None else "n/a"

@@ -100,6 +100,67 @@ class _Loss(torch.nn.Module):
         return self.model.loss(batch)
 
 
+#: seconds between the progress lines of a run without a progress bar (stderr not a terminal:
+#: SLURM, nohup); ``STABLEWM_PROGRESS_SECONDS`` overrides it
+PROGRESS_SECONDS = 30.0
+
+
+class _Heartbeat:
+    """Plain progress lines on stderr, every :data:`PROGRESS_SECONDS`, when there is no bar."""
+
+    def __init__(self, run: str, steps: int, enabled: bool):
+        import os
+
+        self.run, self.steps, self.enabled = run, steps, enabled
+        self.every = float(os.environ.get("STABLEWM_PROGRESS_SECONDS", PROGRESS_SECONDS))
+        self.last = time.monotonic()
+
+    def maybe(self, step: int, loss: float, rate: float, batch: int) -> None:
+        import sys
+
+        now = time.monotonic()
+        if not self.enabled or (now - self.last < self.every and step < self.steps):
+            return
+        self.last = now
+        left = (self.steps - step) * batch / max(rate, 1e-9)
+        eta = (
+            f"{int(left // 3600)}h{int(left % 3600 // 60):02d}m"
+            if left >= 3600
+            else f"{int(left // 60)}m{int(left % 60):02d}s"
+        )
+        sys.stderr.write(
+            f"train {self.run}: step {step}/{self.steps} ({100 * step / self.steps:.0f}%), loss {loss:.4f}, "
+            f"{rate:.0f} samples/s, ETA {eta}\n"
+        )
+        sys.stderr.flush()
+
+
+class _GracefulStop:
+    """Ctrl-C during :meth:`Trainer.fit`: the first asks to stop after the current step (which then
+    saves a checkpoint), a second stops at once. Only in the main thread (signals are delivered there)."""
+
+    def __init__(self):
+        import signal
+        import threading
+
+        self.requested = False
+        self._previous = None
+        if threading.current_thread() is threading.main_thread():
+            self._previous = signal.signal(signal.SIGINT, self._on_sigint)
+
+    def _on_sigint(self, signum, frame) -> None:
+        if self.requested:
+            raise KeyboardInterrupt
+        self.requested = True
+
+    def restore(self) -> None:
+        if self._previous is not None:
+            import signal
+
+            signal.signal(signal.SIGINT, self._previous)
+            self._previous = None
+
+
 class Trainer:
     """Trains ``model`` on ``data`` (:class:`~stable_worldmodel.train.data.TrainData`) into ``folder``.
 
@@ -291,6 +352,8 @@ class Trainer:
             disable=not (self.progress and main),
             dynamic_ncols=True,
         )
+        beat = _Heartbeat(self.run, self.steps, enabled=main and not self.progress)
+        stop = _GracefulStop()
         try:
             while self.step < self.steps:
                 if self.before_step is not None:
@@ -340,6 +403,7 @@ class Trainer:
                     if main:
                         log.log(record)
                     bar.set_postfix(loss=f"{last_loss:.4f}", samples_s=f"{rate:.0f}")
+                    beat.maybe(self.step, last_loss, rate, bs)
                 saved = bool(self.ckpt_every and self.step % self.ckpt_every == 0 and self.step < self.steps)
                 if saved:
                     self.save()
@@ -347,7 +411,19 @@ class Trainer:
                     if not saved:
                         self.save()  # the evaluation plans with the checkpoint of this step
                     self._evaluate(log)
+                if stop.requested and self.step < self.steps:  # Ctrl-C: between two steps, the state is whole
+                    if not saved:
+                        self.save()
+                    log.close()
+                    exc = KeyboardInterrupt()
+                    exc.swm_run = (self.run, self.folder, self.step, self.steps, True)
+                    raise exc
+        except KeyboardInterrupt as exc:  # a second Ctrl-C, mid-step: the last checkpoint stands
+            if not hasattr(exc, "swm_run"):
+                exc.swm_run = (self.run, self.folder, self.step, self.steps, False)
+            raise
         finally:
+            stop.restore()
             bar.close()
         if val_loss is None:
             val_loss = self.validate()

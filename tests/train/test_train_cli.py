@@ -150,3 +150,46 @@ def test_bad_values_are_one_line(swm, toy, error_line, _stablewm_home, args, cod
     assert result.exit_code == code
     assert expected in error_line(result)
     assert no_runs(_stablewm_home)
+
+
+def test_without_a_terminal_progress_comes_as_plain_lines(swm, toy, monkeypatch):
+    monkeypatch.setenv("STABLEWM_PROGRESS_SECONDS", "0")  # a line at every log (default: every 30 s)
+    result = swm("train", "dummy", "--dataset", toy, "--steps", "4", "--name", "p", *QUICK)
+    assert result.exit_code == 0, result.output
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1  # the log steps: here only the last (log_every 10)
+    assert re.fullmatch(r"train p: step 4/4 \(100%\), loss \d+\.\d{4}, \d+ samples/s, ETA 0m00s", lines[0]), lines
+
+
+def test_ctrl_c_saves_a_checkpoint_and_prints_the_resume_command(swm, toy, monkeypatch, _stablewm_home):
+    """The first Ctrl-C stops after the current step, saves it and prints how to resume; the resumed
+    run ends with the weights of an uninterrupted one."""
+    import os
+    import signal
+    import sys
+
+    from stable_worldmodel.train import trainer as trainer_module
+
+    before = signal.getsignal(signal.SIGINT)
+    args = ("train", "dummy", "--dataset", toy, "--steps", "8", *QUICK)
+    assert swm(*args, "--name", "whole").exit_code == 0
+    step = trainer_module.Trainer._train_step_loss
+
+    def interrupted_at_3(self, bs):
+        if self.step == 2:  # during step 3
+            os.kill(os.getpid(), signal.SIGINT)
+        return step(self, bs)
+
+    monkeypatch.setattr(trainer_module.Trainer, "_train_step_loss", interrupted_at_3)
+    monkeypatch.setattr(sys, "argv", ["swm", *args, "--name", "cut"])
+    cut = swm(*args, "--name", "cut")
+    assert cut.exit_code == 130, cut.output
+    folder = _stablewm_home / "checkpoints" / "cut"
+    assert f"Interrupted at step 3 of 8: checkpoint at step 3 saved in {folder}. Resume with:" in cut.stderr
+    assert f"swm train dummy --dataset {toy} --steps 8" in cut.stderr and "--name cut --resume" in cut.stderr
+    assert json.loads((folder / "protocol.json").read_text())["steps_done"] == 3
+    monkeypatch.setattr(trainer_module.Trainer, "_train_step_loss", step)
+    assert swm(*args, "--name", "cut", "--resume").exit_code == 0
+    whole, resumed = (torch.load(_stablewm_home / "checkpoints" / n / "weights.pt") for n in ("whole", "cut"))
+    assert all(torch.equal(whole[k], resumed[k]) for k in whole)
+    assert signal.getsignal(signal.SIGINT) is before  # the handler of before the run is back
