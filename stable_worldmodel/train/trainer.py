@@ -119,7 +119,7 @@ class _Heartbeat:
         import sys
 
         now = time.monotonic()
-        if not self.enabled or (now - self.last < self.every and step < self.steps):
+        if not self.enabled or now - self.last < self.every:
             return
         self.last = now
         left = (self.steps - step) * batch / max(rate, 1e-9)
