@@ -103,6 +103,14 @@ def _protocol_rows(protocol: dict[str, Any]) -> list[tuple[str, Any]]:
     final = protocol.get("final")
     if isinstance(final, dict):
         rows += [(f"final {k.replace('_', ' ')}", v) for k, v in final.items() if v is not None]
+    made = protocol.get("provenance")
+    if isinstance(made, dict):
+        versions = made.get("versions") or {}
+        rows.append(("versions", ", ".join(f"{k} {v}" for k, v in versions.items())))
+        git = made.get("git")
+        if isinstance(git, dict):
+            rows.append(("git commit", f"{git.get('commit')}" + (" (uncommitted changes)" if git.get("dirty") else "")))
+        rows += [(key, made[key]) for key in ("command", "host", "started", "ended") if made.get(key)]
     return rows
 
 

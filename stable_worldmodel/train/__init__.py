@@ -266,7 +266,7 @@ def _train_locked(
     from ..wm import utils as wmu
     from . import distributed
     from .data import TrainData
-    from .run import STATE_NAME, MetricsLog, load_train_state
+    from .run import STATE_NAME, MetricsLog, load_train_state, provenance
     from .trainer import Trainer
 
     state_path = folder / STATE_NAME
@@ -328,6 +328,7 @@ def _train_locked(
         "precision": precision,
         **data.protocol(),
         "final": None,  # set when the run ends: a run killed mid-way shows as partial
+        "provenance": provenance(),  # versions, git commit, command line, host, start (and end) time
     }
     if init is not None:
         protocol["init_from"] = init

@@ -192,3 +192,50 @@ def plot_losses(records: list[dict[str, Any]], path: Path, title: str) -> Path |
     finally:
         plt.close(fig)
     return path
+
+
+def provenance() -> dict[str, Any]:
+    """Where and with what a run is trained: package versions, the git commit of the working
+    directory (when it is a repository; ``dirty`` when it has uncommitted changes), the command
+    line, the host and the start time (UTC, ISO 8601). Recorded in ``protocol.json``."""
+    import datetime
+    import platform
+    import shlex
+    import socket
+    import subprocess
+    import sys
+
+    import numpy as np
+    import torch
+
+    from .. import __version__
+
+    def git(*args: str) -> str | None:
+        try:
+            out = subprocess.run(["git", *args], capture_output=True, text=True, timeout=5)
+        except (OSError, subprocess.SubprocessError):
+            return None
+        return out.stdout.strip() if out.returncode == 0 else None
+
+    commit = git("rev-parse", "HEAD")
+    record: dict[str, Any] = {
+        "versions": {
+            "stable_worldmodel": __version__,
+            "python": platform.python_version(),
+            "torch": torch.__version__,
+            "numpy": np.__version__,
+        },
+        "command": shlex.join(sys.argv),
+        "host": socket.gethostname(),
+        "started": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+    }
+    if commit:
+        record["git"] = {"commit": commit, "dirty": bool(git("status", "--porcelain", "--untracked-files=no"))}
+    return record
+
+
+def now_utc() -> str:
+    """The current time, UTC, ISO 8601 (seconds)."""
+    import datetime
+
+    return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")

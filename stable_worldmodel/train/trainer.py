@@ -27,7 +27,7 @@ from ..wm import utils as wmu
 from ..wm.base import HasValidationLoss
 from . import distributed
 from .distributed import DistInfo
-from .run import STATE_NAME, TRAIN_STATE_FORMAT, MetricsLog, plot_losses, rng_state, set_rng_state
+from .run import STATE_NAME, TRAIN_STATE_FORMAT, MetricsLog, now_utc, plot_losses, rng_state, set_rng_state
 
 logger = logging.getLogger(__name__)
 
@@ -431,6 +431,8 @@ class Trainer:
                 log.log({"step": self.step, "val/loss": val_loss})
         seconds = time.perf_counter() - start
         self.protocol["final"] = {"train_loss": last_loss, "val_loss": val_loss}
+        if isinstance(self.protocol.get("provenance"), dict):
+            self.protocol["provenance"]["ended"] = now_utc()
         self.save(final=True)
         if self.evaluator is not None and self.eval_every:
             self._evaluate(log)

@@ -472,3 +472,37 @@ def test_evaluation_during_training_logs_success_keeps_the_best_and_changes_no_w
     world_model_policy("evaluated/best")  # swm eval --policy wm:evaluated/best plans with it
     with pytest.raises(ConfigError, match="eval_every"):
         fit("lewm", "bad", steps=2, eval_every=0)
+
+
+def test_a_run_records_versions_commit_command_host_and_times(fit, monkeypatch, tmp_path):
+    import re
+    import subprocess
+    import sys
+
+    import stable_worldmodel
+
+    repo = tmp_path / "project"  # a research project under git, where the run is started
+    repo.mkdir()
+    subprocess.run(["git", "init", "-q", str(repo)], check=True)
+    (repo / "train.py").write_text("print('hi')\n")
+    subprocess.run(["git", "-C", str(repo), "add", "train.py"], check=True)
+    subprocess.run(
+        ["git", "-C", str(repo), "-c", "user.name=t", "-c", "user.email=t@t", "commit", "-qm", "x"], check=True
+    )
+    monkeypatch.chdir(repo)
+    monkeypatch.setattr(sys, "argv", ["train.py", "--lr", "3e-4"])
+    made = json.loads((fit("dummy", "prov", steps=2).folder / "protocol.json").read_text())["provenance"]
+    assert made["versions"]["stable_worldmodel"] == stable_worldmodel.__version__
+    assert made["versions"]["torch"] == torch.__version__
+    assert made["command"] == "train.py --lr 3e-4" and made["host"]
+    head = subprocess.run(["git", "-C", str(repo), "rev-parse", "HEAD"], capture_output=True, text=True).stdout.strip()
+    assert made["git"] == {"commit": head, "dirty": False}
+    stamp = r"\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\+00:00"
+    assert re.fullmatch(stamp, made["started"]) and re.fullmatch(stamp, made["ended"])
+    assert made["started"] <= made["ended"]
+    (repo / "train.py").write_text("print('changed')\n")
+    assert json.loads((fit("dummy", "dirty", steps=2).folder / "protocol.json").read_text())["provenance"]["git"][
+        "dirty"
+    ]
+    monkeypatch.chdir(tmp_path)  # not a repository: no git entry
+    assert "git" not in json.loads((fit("dummy", "nogit", steps=2).folder / "protocol.json").read_text())["provenance"]

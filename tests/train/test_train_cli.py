@@ -193,3 +193,13 @@ def test_ctrl_c_saves_a_checkpoint_and_prints_the_resume_command(swm, toy, monke
     whole, resumed = (torch.load(_stablewm_home / "checkpoints" / n / "weights.pt") for n in ("whole", "cut"))
     assert all(torch.equal(whole[k], resumed[k]) for k in whole)
     assert signal.getsignal(signal.SIGINT) is before  # the handler of before the run is back
+
+
+def test_show_model_shows_how_the_run_was_made(swm, toy):
+    import stable_worldmodel
+
+    assert swm("train", "dummy", "--dataset", toy, "--steps", "2", "--name", "made", *QUICK).exit_code == 0
+    shown = swm("show", "model", "made").stdout
+    assert f"stable_worldmodel {stable_worldmodel.__version__}" in shown
+    for row in ("command", "host", "started", "ended"):
+        assert f"│ {row} " in shown, row
