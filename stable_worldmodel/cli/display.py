@@ -293,14 +293,21 @@ def display_model_type_info(info: dict[str, Any]) -> None:
     console().print(Panel(Group(*parts), title=f"[bold]model type[/] {info['name']}", expand=False))
 
 
+def _heading(title: str, count: int, note: str | None) -> bool:
+    """Print ``title (count) in note`` (or that there are none); whether a table follows."""
+    where = f" in {note}" if note else ""
+    if not count:
+        console().print(f"No {title.lower()}{where}.", soft_wrap=True)
+        return False
+    console().print(f"[bold]{title}[/] ({count}){where}", soft_wrap=True)
+    return True
+
+
 def names_table(title: str, names: Sequence[str], note: str | None = None) -> None:
     """Print ``title (count) in note`` and a one-column table of ``names`` (or a note that there are none)."""
-    out = console()
-    where = f" in {note}" if note else ""
-    if not names:
-        out.print(f"No {title.lower()}{where}.", soft_wrap=True)
+    if not _heading(title, len(names), note):
         return
-    out.print(f"[bold]{title}[/] ({len(names)}){where}", soft_wrap=True)
+    out = console()
     table = Table(show_header=False)
     table.add_column("name", style="cyan", no_wrap=True)
     for name in names:
@@ -310,19 +317,15 @@ def names_table(title: str, names: Sequence[str], note: str | None = None) -> No
 
 def rows_table(title: str, columns: Sequence[str], rows: Sequence[Sequence[str]], note: str | None = None) -> None:
     """Print ``title (count) in note`` and a table of ``rows`` under ``columns`` (first column: the names)."""
-    out = console()
-    where = f" in {note}" if note else ""
-    if not rows:
-        out.print(f"No {title.lower()}{where}.", soft_wrap=True)
+    if not _heading(title, len(rows), note):
         return
-    out.print(f"[bold]{title}[/] ({len(rows)}){where}", soft_wrap=True)
     table = Table()
     for i, column in enumerate(columns):
         right = column in ("episodes", "steps", "size")
         table.add_column(column, style="cyan" if i == 0 else None, no_wrap=i == 0, justify="right" if right else "left")
     for row in rows:
         table.add_row(*row)
-    out.print(table)
+    console().print(table)
 
 
 def human_bytes(n: int) -> str:

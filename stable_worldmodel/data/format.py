@@ -36,6 +36,7 @@ from .. import keys
 from ..errors import ConfigError, did_you_mean
 
 __all__ = [
+    "BatchedCommits",
     "EPISODE_DATA_KEY",
     "FORMATS",
     "WRITE_MODES",
@@ -102,6 +103,34 @@ class Writer(Protocol):
     def __exit__(self, *exc: Any) -> Any: ...
     def write_episode(self, episode: Mapping[str, Any]) -> None: ...
     def write_episodes(self, episodes: Iterable[Mapping[str, Any]]) -> None: ...
+
+
+class BatchedCommits:
+    """Mixin of a :class:`Writer` that commits ``commit_episodes`` episodes at a time through its
+    ``_commit(batch)``: ``write_episode``, ``write_episodes`` and the context manager (``close`` on exit)."""
+
+    commit_episodes: int = 32
+
+    def __enter__(self) -> Any:
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+    def write_episode(self, episode: Mapping[str, Any]) -> None:
+        """Append one episode (one commit)."""
+        self.write_episodes([episode])
+
+    def write_episodes(self, episodes: Any, next_seed: int | None = None) -> None:
+        """Append ``episodes`` (any iterable), one commit per ``commit_episodes`` of them."""
+        batch: list = []
+        for episode in episodes:
+            batch.append(episode)
+            if len(batch) == self.commit_episodes:
+                self._commit(batch)
+                batch = []
+        if batch:
+            self._commit(batch)
 
 
 class Format:

@@ -30,7 +30,7 @@ import logging
 import os
 import shutil
 import sys
-from collections.abc import Callable, Collection, Iterable, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -39,7 +39,7 @@ import numpy as np
 from .._optional import require
 from ..errors import ConfigError, DatasetFormatError, DatasetNotFoundError
 from .dataset import Dataset
-from .format import per_step_columns, validate_write_mode
+from .format import BatchedCommits, per_step_columns, validate_write_mode
 from .writer import is_image_column
 
 __all__ = ["LanceDataset", "LanceWriter", "lance_dir"]
@@ -286,13 +286,15 @@ class LanceDataset(Dataset):
         """Nothing to release: Lance opens files per read."""
 
 
-class LanceWriter:
+class LanceWriter(BatchedCommits):
     """Append episodes to a Lance dataset (module docstring).
 
     ``path``: the ``.lance`` directory (or a folder and ``table_name``, as upstream's LanceDB
     writer). ``mode`` as :data:`~.format.WRITE_MODES` (upstream's older ``overwrite=True`` is
     ``mode="overwrite"``). ``jpeg_quality``: of the encoded frames (upstream: 95).
     """
+
+    commit_episodes = COMMIT_EPISODES
 
     def __init__(
         self,
@@ -355,27 +357,6 @@ class LanceWriter:
     @property
     def columns(self) -> list[str]:
         return list(self._layout)
-
-    def __enter__(self) -> LanceWriter:
-        return self
-
-    def __exit__(self, *exc: Any) -> None:
-        self.close()
-
-    def write_episode(self, episode: Mapping[str, Any]) -> None:
-        """Append one episode (one Lance commit)."""
-        self.write_episodes([episode])
-
-    def write_episodes(self, episodes: Iterable[Mapping[str, Any]], next_seed: int | None = None) -> None:
-        """Append ``episodes``, one commit per :data:`COMMIT_EPISODES` episodes."""
-        batch: list = []
-        for episode in episodes:
-            batch.append(episode)
-            if len(batch) == COMMIT_EPISODES:
-                self._commit(batch)
-                batch = []
-        if batch:
-            self._commit(batch)
 
     def _commit(self, episodes: list[Mapping[str, Any]]) -> None:
         import pyarrow as pa

@@ -35,7 +35,7 @@ import logging
 import os
 import shutil
 from collections import OrderedDict
-from collections.abc import Iterable, Iterator, Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from fractions import Fraction
 from pathlib import Path
 from typing import Any
@@ -45,7 +45,7 @@ import numpy as np
 from .._optional import require
 from ..errors import ConfigError, DatasetFormatError, DatasetNotFoundError, check_int
 from .dataset import missing_column
-from .format import per_step_columns, validate_write_mode
+from .format import BatchedCommits, per_step_columns, validate_write_mode
 from .lance import COMMIT_EPISODES, COMPACT_ABOVE, EPISODE_INDEX, META_KEY, LanceDataset, LanceWriter, _lance, _meta
 from .writer import is_image_column
 
@@ -366,7 +366,7 @@ class LanceVideoDataset(LanceDataset):
         self._decoders.clear()
 
 
-class LanceVideoWriter:
+class LanceVideoWriter(BatchedCommits):
     """Append episodes to a Lance video dataset (module docstring).
 
     ``path``: the frames table ``<name>.lance``, a folder and ``table_name``, or a folder (the
@@ -374,6 +374,8 @@ class LanceVideoWriter:
     videos; ``mode`` as :data:`~.format.WRITE_MODES`. One commit of each table per
     :data:`~.lance.COMMIT_EPISODES` episodes.
     """
+
+    commit_episodes = COMMIT_EPISODES
 
     def __init__(
         self,
@@ -444,27 +446,6 @@ class LanceVideoWriter:
     @property
     def columns(self) -> list[str]:
         return [*self._frames.columns, *self._videos]
-
-    def __enter__(self) -> LanceVideoWriter:
-        return self
-
-    def __exit__(self, *exc: Any) -> None:
-        self.close()
-
-    def write_episode(self, episode: Mapping[str, Any]) -> None:
-        """Append one episode (one commit of each table)."""
-        self.write_episodes([episode])
-
-    def write_episodes(self, episodes: Iterable[Mapping[str, Any]], next_seed: int | None = None) -> None:
-        """Append ``episodes``, one commit of each table per :data:`~.lance.COMMIT_EPISODES` episodes."""
-        batch: list = []
-        for episode in episodes:
-            batch.append(episode)
-            if len(batch) == COMMIT_EPISODES:
-                self._commit(batch)
-                batch = []
-        if batch:
-            self._commit(batch)
 
     @staticmethod
     def _videos_schema(columns: Mapping[str, Any] | None) -> Any:

@@ -76,7 +76,7 @@ def train(
     trains a frame decoder on RUN's latents and dataset, as run ``RUN-frame``). ``steps`` or ``epochs`` (passes over
     the train samples) bound the run (default: the preset's steps). The model, its config and
     ``protocol.json`` go to ``<cache>/checkpoints/<name>/`` (default name ``<dataset>-<model>``),
-    with metrics (``metrics.jsonl``, ``metrics.csv``, TensorBoard when installed) and ``loss.png``.
+    with metrics (``metrics.jsonl``, ``metrics.csv``, TensorBoard events in ``tensorboard/``) and ``loss.png``.
     ``resume=True`` continues the run of that name from its last checkpoint (same result as
     an uninterrupted run) up to its planned steps, or to ``steps`` when more are given (the run
     is extended: its learning-rate schedule becomes the one planned for the new total, from the

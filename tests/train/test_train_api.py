@@ -506,3 +506,15 @@ def test_a_run_records_versions_commit_command_host_and_times(fit, monkeypatch, 
     ]
     monkeypatch.chdir(tmp_path)  # not a repository: no git entry
     assert "git" not in json.loads((fit("dummy", "nogit", steps=2).folder / "protocol.json").read_text())["provenance"]
+
+
+def test_metrics_are_mirrored_to_tensorboard(fit):
+    """TensorBoard is installed with the package: every run's metrics are in ``<run>/tensorboard``."""
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    result = fit("dummy", "tb", steps=6, log_every=2)
+    events = EventAccumulator(str(result.folder / "tensorboard"))
+    events.Reload()
+    logged = [(e.step, e.value) for e in events.Scalars("train/loss")]
+    assert [s for s, _ in logged] == [s for s, _ in train_losses(result.folder)] == [2, 4, 6]
+    assert np.allclose([v for _, v in logged], [v for _, v in train_losses(result.folder)], rtol=1e-6)
