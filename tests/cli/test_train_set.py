@@ -5,11 +5,11 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
-from types import SimpleNamespace
 
 import pytest
 
 from stable_worldmodel.errors import ConfigError
+from stable_worldmodel.train.trainer import TrainResult
 
 
 @pytest.fixture
@@ -20,16 +20,7 @@ def calls(monkeypatch):
     def fake_train(model, dataset, preset="tiny", **kwargs):
         seen.append({"model": model, "dataset": dataset, "preset": preset, **kwargs})
         run = kwargs.get("name") or f"{dataset}-{model}"
-        return SimpleNamespace(
-            run=run,
-            folder=Path("/nowhere") / run,
-            steps=1,
-            seconds=0.0,
-            samples_per_second=0.0,
-            train_loss=0.0,
-            val_loss=None,
-            features=None,
-        )
+        return TrainResult(run, Path("/nowhere") / run, 1, 0.0, None, 0.0, 0.0)  # the real type: no drift
 
     monkeypatch.setattr("stable_worldmodel.train.train", fake_train)
     return seen
