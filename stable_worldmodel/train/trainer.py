@@ -410,6 +410,7 @@ class Trainer:
                 if self._eval_due() and self.step < self.steps:
                     if not saved:
                         self.save()  # the evaluation plans with the checkpoint of this step
+                        saved = True
                     self._evaluate(log)
                 if stop.requested and self.step < self.steps:  # Ctrl-C: between two steps, the state is whole
                     if not saved:
