@@ -124,6 +124,46 @@ def common(
     setup_logging(verbose)
 
 
+def with_cache_dir(command: Any) -> Any:
+    """``command`` with a ``--cache-dir DIR`` option: the cache folder of this invocation (datasets,
+    checkpoints), as ``STABLEWM_HOME=DIR swm ...`` would set it."""
+    import functools
+    import inspect
+    from pathlib import Path
+
+    option = typer.Option(
+        "--cache-dir",
+        metavar="DIR",
+        help="Cache folder of datasets and checkpoints for this command (default: $STABLEWM_HOME, else "
+        "~/.stable_worldmodel).",
+        file_okay=False,
+        show_default=False,
+    )
+    annotation = Annotated[Path | None, option]
+
+    @functools.wraps(command)
+    def wrapped(*args: Any, cache_dir: Path | None = None, **kwargs: Any) -> Any:
+        if cache_dir is None:
+            return command(*args, **kwargs)
+        before = os.environ.get("STABLEWM_HOME")
+        os.environ["STABLEWM_HOME"] = str(Path(cache_dir).expanduser().resolve())
+        try:
+            return command(*args, **kwargs)
+        finally:  # swm.cli.main() called from Python: the next call sees the environment as it was
+            if before is None:
+                os.environ.pop("STABLEWM_HOME", None)
+            else:
+                os.environ["STABLEWM_HOME"] = before
+
+    signature = inspect.signature(command, eval_str=True)
+    params = [*signature.parameters.values()]
+    params.append(inspect.Parameter("cache_dir", inspect.Parameter.KEYWORD_ONLY, default=None, annotation=annotation))
+    wrapped.__signature__ = signature.replace(parameters=params)
+    wrapped.__annotations__ = {p.name: p.annotation for p in params}
+    del wrapped.__wrapped__  # typer reads the signature above, not the command's
+    return wrapped
+
+
 def _register() -> None:
     from .data_cmds import convert_cmd, preview_cmd
     from .demo import demo
@@ -131,23 +171,23 @@ def _register() -> None:
     from .resources import checkpoints_cmd, datasets_cmd, delete, inspect_cmd, list_cmd, show
     from .train import train_cmd
 
-    app.command("list")(list_cmd)
-    app.command("show")(show)
-    app.command("delete")(delete)
-    app.command("collect")(collect)
-    app.command("eval")(eval_cmd)
-    app.command("sweep")(sweep)
-    app.command("train")(train_cmd)
+    app.command("list")(with_cache_dir(list_cmd))
+    app.command("show")(with_cache_dir(show))
+    app.command("delete")(with_cache_dir(delete))
+    app.command("collect")(with_cache_dir(collect))
+    app.command("eval")(with_cache_dir(eval_cmd))
+    app.command("sweep")(with_cache_dir(sweep))
+    app.command("train")(with_cache_dir(train_cmd))
     app.command("envs")(envs)
     app.command("fovs")(fovs)
-    app.command("demo")(demo)
+    app.command("demo")(with_cache_dir(demo))
     # the names upstream 0.1.1 documents
-    app.command("datasets")(datasets_cmd)
-    app.command("inspect")(inspect_cmd)
-    app.command("checkpoints")(checkpoints_cmd)
-    app.command("convert")(convert_cmd)
+    app.command("datasets")(with_cache_dir(datasets_cmd))
+    app.command("inspect")(with_cache_dir(inspect_cmd))
+    app.command("checkpoints")(with_cache_dir(checkpoints_cmd))
+    app.command("convert")(with_cache_dir(convert_cmd))
     # upstream's main
-    app.command("preview")(preview_cmd)
+    app.command("preview")(with_cache_dir(preview_cmd))
 
 
 _register()

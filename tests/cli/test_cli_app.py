@@ -224,3 +224,23 @@ def test_shell_completion():
 
     assert complete("swm co") == ["collect", "convert"]
     assert "--policy" in complete("swm collect --pol")
+
+
+def test_every_command_that_reads_the_cache_takes_cache_dir(swm, tmp_path, _stablewm_home):
+    """``--cache-dir DIR``: the cache of this invocation (as ``STABLEWM_HOME=DIR``), on every command that
+    reads or writes datasets or checkpoints."""
+    import os
+
+    import typer.main
+
+    from stable_worldmodel.cli import app
+
+    group = typer.main.get_command(app)
+    with_option = {name for name, cmd in group.commands.items() if any(p.name == "cache_dir" for p in cmd.params)}
+    assert with_option == set(group.commands) - {"envs", "fovs"}
+    other = tmp_path / "other"
+    made = swm("collect", "swm/Toy-v0", "-n", "1", "--max-steps", "3", "--image-size", "16", "--cache-dir", str(other))
+    assert made.exit_code == 0, made.output
+    assert (other / "toy-v0-random.h5").is_file() and not _stablewm_home.exists()
+    assert "toy-v0-random" in swm("list", "dataset", "--cache-dir", str(other)).stdout
+    assert os.environ["STABLEWM_HOME"] == str(_stablewm_home)  # only for the command
