@@ -267,15 +267,14 @@ def make_world(
     """A World of ``num_envs`` copies of ``env_id`` with square ``image_size`` images and
     episodes cut after :func:`episode_limit` steps.
 
-    ``verbose`` (progress bars of recording and evaluation) defaults to 1 when stderr is a
-    terminal and 0 otherwise, so logs and pipes get no carriage-return spam.
+    ``verbose`` (progress of recording and evaluation) defaults to 1: a bar in a terminal, and
+    otherwise a plain line every 30 s (:mod:`stable_worldmodel.world.progress`), so logs and pipes
+    get no carriage-return spam and a long job is never silent.
     """
-    import sys
-
     from ..world import World
 
     if verbose is None:
-        verbose = int(sys.stderr.isatty())
+        verbose = 1
     if seed is not None:
         kwargs["seed"] = seed
     limit = episode_limit(env_id, max_steps)

@@ -21,9 +21,9 @@ logger = logging.getLogger(__name__)
 
 
 def _progress(world: World, total: int, desc: str):
-    from tqdm.auto import tqdm
+    from .progress import progress
 
-    return tqdm(total=total, desc=desc, unit="ep", disable=not world.verbose, leave=False)
+    return progress(total, desc, enabled=bool(world.verbose))
 
 
 def reseed_policy(policy: Any, seed: int | None) -> None:
@@ -90,8 +90,12 @@ def evaluate(
     done_count = 0
     bar = _progress(world, episodes, f"evaluate {world.env_name}")
     try:
+        t = 0
         while done_count < episodes:
             world.step()
+            t += 1
+            bar.set_postfix_str(f"{int(successes[finished_mask].sum())} successes, env step {t}", refresh=False)
+            bar.update(0)  # the step shows while the envs of a batch run together
             if frames is not None:
                 pixels = np.asarray(world.infos[keys.PIXELS])
                 for i in np.flatnonzero(slot >= 0):

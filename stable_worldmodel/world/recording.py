@@ -25,9 +25,9 @@ SEED_LIMIT = 2**31 - 1
 
 
 def _progress(world: Any, total: int, desc: str, initial: int = 0):
-    from tqdm.auto import tqdm
+    from .progress import progress
 
-    return tqdm(total=total, initial=initial, desc=desc, unit="ep", disable=int(getattr(world, "verbose", 1)) <= 0)
+    return progress(total, desc, enabled=int(getattr(world, "verbose", 1)) > 0, initial=initial)
 
 
 NOT_RECORDED = frozenset({keys.RENDER_TIME})  # wall-clock timings: the same seed must give the same bytes
@@ -174,8 +174,8 @@ def record_episodes(
             written += len(batch)
             done += len(batch)
             rows += sum(len(next(iter(ep.values()))) for ep in batch)
+            bar.set_postfix_str(f"{rows / max(time.perf_counter() - t0, 1e-9):.0f} rows/s", refresh=False)
             bar.update(len(batch))
-            bar.set_postfix(rows_per_s=f"{rows / max(time.perf_counter() - t0, 1e-9):.0f}")
             if done >= episodes:
                 break
             ids = [int(i) for i in ended]
