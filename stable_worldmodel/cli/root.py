@@ -167,6 +167,7 @@ def with_cache_dir(command: Any) -> Any:
 def _register() -> None:
     from .data_cmds import convert_cmd, preview_cmd
     from .demo import demo
+    from .hub import push_cmd
     from .pipeline import collect, envs, eval_cmd, fovs, sweep
     from .resources import checkpoints_cmd, datasets_cmd, delete, inspect_cmd, list_cmd, show
     from .train import train_cmd
@@ -181,6 +182,7 @@ def _register() -> None:
     app.command("envs")(envs)
     app.command("fovs")(fovs)
     app.command("demo")(with_cache_dir(demo))
+    app.command("push")(with_cache_dir(push_cmd))
     # the names upstream 0.1.1 documents
     app.command("datasets")(with_cache_dir(datasets_cmd))
     app.command("inspect")(with_cache_dir(inspect_cmd))

@@ -4,7 +4,8 @@ Two layouts are understood, the first that matches wins:
 
     <cache>/checkpoints/<run>/              a checkpoint folder (see :mod:`stable_worldmodel.wm.utils`):
         weights.pt  config.json  [protocol.json]   state_dict + ``_target_`` tree, rebuilt without pickle
-    <cache>/checkpoints/models--<user>--<repo>/    the same, named ``<user>/<repo>``
+    <cache>/checkpoints/models--<user>--<repo>/    the same, named ``<user>/<repo>`` (else the Hugging Face
+                                            cache's snapshot of it, see ``resolve_checkpoint``)
     <cache>/<name>_object.ckpt              older runs: a whole pickled module (or a folder holding one)
 """
 
@@ -138,7 +139,7 @@ def _load_pickle(path: Path, caller: str, allow_pickle: bool | None) -> Any:
 
 
 def _unknown(caller: str, model_name: str | Path, root: Path) -> UnknownNameError:
-    from ..wm.utils import CONFIG_NAME, WEIGHTS_NAME, checkpoint_root
+    from ..wm.utils import CONFIG_NAME, WEIGHTS_NAME, checkpoint_root, hf_hub_cache
 
     ckpts = checkpoint_root(root)
     available = list_model_checkpoints(root)
@@ -150,7 +151,9 @@ def _unknown(caller: str, model_name: str | Path, root: Path) -> UnknownNameErro
         orphan = f" {weights} holds {WEIGHTS_NAME} but no {CONFIG_NAME}: save it with save_pretrained(..., config=...)."
     return UnknownNameError(
         f"{caller} requires a checkpoint folder {ckpts}/<run>/ ({WEIGHTS_NAME} + {CONFIG_NAME}), a .pt file with a "
-        f"{CONFIG_NAME} beside it, <user>/<repo> in {ckpts}/models--<user>--<repo>/ (nothing is downloaded), "
+        f"{CONFIG_NAME} beside it, <user>/<repo>[@<revision>] in {ckpts}/models--<user>--<repo>/ or in the Hugging "
+        f"Face cache {hf_hub_cache()}/models--<user>--<repo>/snapshots/ (nothing is downloaded: "
+        "stable_worldmodel.wm.utils.from_pretrained downloads), "
         f"or a pickled {root}/<name>{SUFFIX} (or a folder of *{SUFFIX}), got {name!r}.{orphan}"
         f"{did_you_mean(name, available)} Available in {root}: {', '.join(available) or '(none)'}"
     )

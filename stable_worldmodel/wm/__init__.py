@@ -49,6 +49,8 @@ _ATTRS = {
     "TemporalStraighteningLoss": ".loss",
     "save_pretrained": ".utils",
     "load_pretrained": ".utils",
+    "from_pretrained": ".utils",
+    "push_to_hub": ".utils",
     "instantiate": ".utils",
     "ConvEncoder": ".encoders",
     "vit_hf": ".encoders",
@@ -78,4 +80,4 @@ if TYPE_CHECKING:  # pragma: no cover
     from .lewm import LeWM  # noqa: F401
     from .loss import PLDMLoss, SIGReg, TemporalStraighteningLoss, VCReg  # noqa: F401
     from .pldm import PLDM  # noqa: F401
-    from .utils import instantiate, load_pretrained, save_pretrained  # noqa: F401
+    from .utils import from_pretrained, instantiate, load_pretrained, push_to_hub, save_pretrained  # noqa: F401

@@ -227,7 +227,9 @@ class Run:
 
     @classmethod
     def open(cls, spec: str | os.PathLike | Run, cache_dir: str | os.PathLike | None = None) -> Run:
-        """The run ``spec`` names (``wm:NAME``, ``gc:NAME``, ``NAME``, ``user/repo`` or a path).
+        """The run ``spec`` names (``wm:NAME``, ``gc:NAME``, ``NAME``, ``user/repo[@revision]`` or a path;
+        ``user/repo`` is looked up in our cache, then in the Hugging Face cache, see
+        :func:`~stable_worldmodel.wm.utils.resolve_checkpoint`).
 
         Missing: ``FileNotFoundError`` naming where it looked, with "did you mean". A damaged
         ``protocol.json``: :class:`~stable_worldmodel.errors.CheckpointError`.
@@ -237,7 +239,10 @@ class Run:
         from .utils import PROTOCOL_NAME, _read_json, resolve_checkpoint
 
         prefix, name = split_spec(spec)
-        weights = resolve_checkpoint(name, cache_dir).resolve()
+        found = resolve_checkpoint(name, cache_dir)
+        # the folder made absolute, the file name kept: in the Hugging Face cache the files of a snapshot
+        # are links into blobs/, and config.json / protocol.json are beside the link, not its target
+        weights = found.parent.resolve() / found.name
         protocol_path = weights.parent / PROTOCOL_NAME
         key = (str(weights), _stamp(weights), _stamp(protocol_path))
         if key not in _OPENED:
