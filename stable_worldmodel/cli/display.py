@@ -263,9 +263,21 @@ def display_model_info(info: dict[str, Any]) -> None:
     console().print(Panel(Group(*parts), title=f"[bold]model[/] {info.get('name', '?')}", expand=False))
 
 
+def _help_table(title: str, rows: Iterable[tuple[str, Any, str]]) -> Table:
+    """A table of ``(key, default, meaning)`` rows under a key / default / meaning header."""
+    table = Table(title=title, box=None, pad_edge=False, title_justify="left", header_style="dim")
+    table.add_column("key", style="bold", no_wrap=True)
+    table.add_column("default", overflow="fold")
+    table.add_column("meaning")
+    for key, default, meaning in rows:
+        shown = default if default == "(required)" else repr(default)
+        table.add_row(key, Text(shown), Text(meaning or "-"))
+    return table
+
+
 def display_model_type_info(info: dict[str, Any]) -> None:
-    """Print a panel with a model type's config class, summary, policy prefix, presets and
-    config fields with their defaults (``info`` from
+    """Print a panel with a model type's config class, summary, policy prefix, presets, config
+    fields and training keys with their defaults and meanings (``info`` from
     :func:`stable_worldmodel.cli.resources.model_type_info`)."""
     rows: list[tuple[str, Any]] = [
         ("config", info["config"]),
@@ -280,7 +292,7 @@ def display_model_type_info(info: dict[str, Any]) -> None:
     presets.add_column()
     for name, values in info["presets"].items():
         presets.add_row(name, Text(", ".join(f"{k}={v!r}" for k, v in values.items())))
-    fields = _kv_table("Fields (defaults)", [(name, Text(repr(value))) for name, value in info["fields"]])
+    fields = _help_table("Config fields (--set KEY=VALUE, --config FILE)", info["fields"])
     parts: list[Any] = [
         Text(info["summary"]),
         Text(""),
@@ -290,6 +302,9 @@ def display_model_type_info(info: dict[str, Any]) -> None:
         Text(""),
         fields,
     ]
+    if info.get("train_keys"):
+        keys = _help_table("Training keys (their flags, --set KEY=VALUE, --config FILE)", info["train_keys"])
+        parts += [Text(""), keys]
     console().print(Panel(Group(*parts), title=f"[bold]model type[/] {info['name']}", expand=False))
 
 

@@ -111,6 +111,19 @@ def _protocol_rows(protocol: dict[str, Any]) -> list[tuple[str, Any]]:
         if isinstance(git, dict):
             rows.append(("git commit", f"{git.get('commit')}" + (" (uncommitted changes)" if git.get("dirty") else "")))
         rows += [(key, made[key]) for key in ("command", "host", "started", "ended") if made.get(key)]
+    used = protocol.get("train_config")
+    if isinstance(used, dict):
+        rows.append(("config file", used.get("file")))
+        applied = used.get("applied") or {}
+        rows.append(("config applied", ", ".join(f"{k}={json.dumps(v)}" for k, v in applied.items()) or "-"))
+        if used.get("overridden"):
+            rows.append(("config overridden", ", ".join(map(str, used["overridden"])) + " (by flags or --set)"))
+    if protocol.get("logger"):
+        rows.append(("logger", protocol["logger"]))
+    run = protocol.get("wandb")
+    if isinstance(run, dict):
+        where = run.get("url") or f"{run.get('mode')} (sync with: wandb sync)"
+        rows.append(("wandb run", f"{run.get('project')}/{run.get('id')} {where}"))
     return rows
 
 
@@ -156,8 +169,8 @@ def pickled_info(name: str, files: Sequence[Path]) -> dict[str, Any]:
 
 def model_type_info(name: str) -> dict[str, Any]:
     """What ``swm show model`` prints for a registered model type (``swm train NAME``): its config
-    class, what it is evaluated with, its presets (the fields each sets) and every config field
-    with its default."""
+    class, what it is evaluated with, its presets (the fields each sets), every config field with
+    its default and meaning, and the training keys (:func:`train_key_info`)."""
     import dataclasses
 
     from ..wm import get_config_class
@@ -171,7 +184,8 @@ def model_type_info(name: str) -> dict[str, Any]:
             return f.default
         return f.default_factory() if f.default_factory is not dataclasses.MISSING else "(required)"
 
-    fields = [(f.name, default(f)) for f in dataclasses.fields(cls) if f.init]
+    meanings = cls.field_help()
+    fields = [(f.name, default(f), meanings.get(f.name, "")) for f in dataclasses.fields(cls) if f.init]
     return {
         "name": name,
         "config": f"{cls.__module__}.{cls.__qualname__}",
@@ -180,7 +194,26 @@ def model_type_info(name: str) -> dict[str, Any]:
         "needs_reward": bool(getattr(cls, "needs_reward", False)),
         "presets": {preset: dict(values) for preset, values in cls.presets.items()},
         "fields": fields,
+        "train_keys": train_key_info(),
     }
+
+
+def train_key_info() -> list[tuple[str, Any, str]]:
+    """``(key, default, meaning)`` of each training key ``swm train --set`` / ``--config`` takes besides
+    the model's config fields (:func:`stable_worldmodel.train.train`'s arguments; a flag's default is
+    the flag's)."""
+    import inspect
+
+    from ..train import TRAIN_KEY_HELP, train
+    from .train import accepted_train_keys
+
+    params = inspect.signature(train).parameters
+    rows = []
+    for key in accepted_train_keys():
+        param = params.get(key)
+        default = "(required)" if param is None or param.default is inspect.Parameter.empty else param.default
+        rows.append((key, default, TRAIN_KEY_HELP.get(key, "")))
+    return rows
 
 
 def model_infos(name: str) -> list[dict[str, Any]]:

@@ -49,6 +49,8 @@ FLAGS = {
     "eval_env": "--eval-env",
     "frameskip": "--frameskip",
     "source": "--from",
+    "logger": "--logger",
+    "wandb_project": "--wandb-project",
 }
 #: how a ``--set`` value of a flag is checked: what the flag's own parser accepts
 _FLAG_PARSERS = {
@@ -61,6 +63,21 @@ _FLAG_PARSERS = {
     "eval_every": int_in(1),
     "eval_episodes": int_in(1),
 }
+
+
+#: the flags whose value is a name (a string)
+_NAME_KEYS = (
+    "model",
+    "dataset",
+    "preset",
+    "device",
+    "precision",
+    "name",
+    "source",
+    "init_from",
+    "logger",
+    "wandb_project",
+)
 
 
 def _resume_command(model: str, run: str) -> str:
@@ -77,33 +94,25 @@ def _resume_command(model: str, run: str) -> str:
     return shlex.join(["swm", "train", model, "--name", run, "--resume"]) + "  (with the options of the first run)"
 
 
-def _set_value(key: str, value: object) -> object:
-    """A ``--set`` value of flag ``key`` checked and converted as the flag would be."""
+def _set_value(key: str, value: object, origin: str = "--set") -> object:
+    """A ``--set`` value (or a ``--config`` file's: ``origin``) of flag ``key`` checked and converted as the
+    flag would be."""
     from ..errors import ConfigError
 
     parse = _FLAG_PARSERS.get(key)
     if parse is None:
-        if key in (
-            "model",
-            "dataset",
-            "preset",
-            "device",
-            "precision",
-            "name",
-            "source",
-            "init_from",
-        ) and not isinstance(value, str):
-            raise ConfigError(f"swm train --set {key} requires a name, got {value!r}; or use {FLAGS[key]}")
+        if key in _NAME_KEYS and not isinstance(value, str):
+            raise ConfigError(f"swm train {origin} {key} requires a name, got {value!r}; or use {FLAGS[key]}")
         if key == "resume" and not isinstance(value, bool):
-            raise ConfigError(f"swm train --set resume requires true or false, got {value!r}; or use --resume")
+            raise ConfigError(f"swm train {origin} resume requires true or false, got {value!r}; or use --resume")
         return value
     if isinstance(value, bool) or not isinstance(value, (int, float, str)):
-        raise ConfigError(f"swm train --set {key} requires a number, got {value!r}")
+        raise ConfigError(f"swm train {origin} {key} requires a number, got {value!r}")
     try:
         return parse(str(value))
     except (ValueError, typer.BadParameter) as exc:
         text = (exc.message if isinstance(exc, typer.BadParameter) else str(exc)).replace("expected ", "requires ", 1)
-        raise ConfigError(f"swm train --set {key} {text}") from None
+        raise ConfigError(f"swm train {origin} {key} {text}") from None
 
 
 def merge_settings(
@@ -128,6 +137,107 @@ def merge_settings(
             )
         flags[key] = value
     return flags, overrides
+
+
+#: a number PyYAML leaves as a string (YAML 1.1 wants a dot in ``1.0e-3``; ``1e-3`` is read as text)
+_YAML_FLOAT = r"[-+]?(\d+\.?\d*|\.\d+)[eE][-+]?\d+"
+
+
+def accepted_train_keys() -> list[str]:
+    """The keys of ``swm train --set`` / ``--config`` besides the model's config fields (``frameskip``
+    and ``source``, flags too, are fields): :func:`~stable_worldmodel.train.train`'s arguments, the
+    flags' (``steps``, ``lr``...) and the trainer's without a flag (``ckpt_every``, ``log_every``...)."""
+    from ..train import PYTHON_ONLY_KEYS, TRAIN_KEY_HELP
+
+    return [k for k in TRAIN_KEY_HELP if k not in PYTHON_ONLY_KEYS]
+
+
+def load_config_file(path: str, model: str) -> dict[str, object]:
+    """The settings of ``swm train --config FILE`` (YAML, or JSON for a ``.json`` file): a mapping of
+    the keys ``--set`` takes, a nested mapping standing for dotted keys (``predictor: {depth: 2}`` is
+    ``predictor.depth``) unless its key is a training key or a field of the model (a field that holds
+    a mapping, such as ``vit_overrides``, takes it whole). Flattened, in the file's order; an unknown key
+    is a :class:`~stable_worldmodel.errors.ConfigError` naming the file, the key and a "did you mean"."""
+    import json
+    import re
+    from pathlib import Path
+
+    from ..errors import ConfigError, did_you_mean
+    from ..wm import get_config_class
+
+    file = Path(path).expanduser()
+    if not file.is_file():
+        why = "is a folder" if file.is_dir() else "does not exist"
+        raise ConfigError(f"swm train --config requires a YAML or JSON file, got {str(path)!r}, which {why}")
+    try:
+        text = file.read_text()
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ConfigError(f"swm train --config requires a readable text file, got {file} ({exc})") from exc
+    yaml_file = file.suffix.lower() != ".json"
+    if not yaml_file:
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise ConfigError(f"swm train --config requires valid JSON in {file}, got {exc}") from None
+    else:
+        import yaml
+
+        try:
+            data = yaml.safe_load(text)
+        except yaml.YAMLError as exc:
+            raise ConfigError(f"swm train --config requires valid YAML in {file}, got {exc}") from None
+    data = {} if data is None else data
+    if not isinstance(data, dict):
+        raise ConfigError(f"swm train --config requires a mapping of KEY: VALUE in {file}, got a {type(data).__name__}")
+    cls = get_config_class(model)
+    train_keys = set(accepted_train_keys())
+    fields = set(cls.field_help())
+    flat: dict[str, object] = {}
+
+    def walk(prefix: str, mapping: dict) -> None:
+        for name, value in mapping.items():
+            if not isinstance(name, str) or not name:
+                raise ConfigError(f"swm train --config requires names as the keys of {file}, got {name!r}")
+            key = prefix + name
+            if isinstance(value, dict) and value and key not in train_keys and key not in fields:
+                walk(key + ".", value)
+                continue
+            if yaml_file and key not in _NAME_KEYS and isinstance(value, str) and re.fullmatch(_YAML_FLOAT, value):
+                value = float(value)
+            flat[key] = value
+
+    walk("", data)
+    accepted = sorted(train_keys | fields)
+    for key in flat:
+        if key in train_keys or cls.unknown_key(key) is None:
+            continue
+        leaf = key.rpartition(".")[2]  # predictor.depth: the field is depth
+        hint = f" Did you mean {leaf!r}?" if leaf != key and leaf in accepted else did_you_mean(key, accepted)
+        raise ConfigError(
+            f"swm train --config {file} has an unknown key {key!r}.{hint} Accepted: the flags' keys (dataset, steps, "
+            f"lr, batch_size, seed...), the trainer's (ckpt_every, log_every, val_every...) and the fields of "
+            f"{cls.__name__} (see swm show model {model})"
+        )
+    return flat
+
+
+def apply_config_file(
+    flags: dict[str, object], given: set[str], settings: dict[str, object], origin: str
+) -> tuple[dict[str, object], dict[str, object], list[str]]:
+    """``(flags, overrides, overridden)``: a config file's ``settings`` applied under the flags given on
+    the command line (``given``: they win, their keys listed in ``overridden``); flag keys checked as
+    ``--set`` checks them, the others left as overrides."""
+    flags, overrides, overridden = dict(flags), {}, []
+    for key, value in settings.items():
+        if key not in FLAGS:
+            overrides[key] = value
+            continue
+        value = _set_value(key, value, origin)
+        if key in given:
+            overridden.append(key)
+        else:
+            flags[key] = value
+    return flags, overrides, overridden
 
 
 def _given(ctx: typer.Context, param: str) -> bool:
@@ -324,15 +434,48 @@ def train_cmd(
     max_steps: Annotated[
         int, typer.Option("--max-steps", parser=int_in(1), metavar="N", help="--online: steps per episode at most.")
     ] = 100,
+    logger: Annotated[
+        str,
+        typer.Option(
+            "--logger",
+            metavar="LOGGER",
+            help=(
+                "Where the metrics go besides metrics.jsonl/metrics.csv: tensorboard, wandb (TensorBoard and a "
+                "Weights & Biases run; WANDB_MODE=offline logs without a network) or none."
+            ),
+        ),
+    ] = "tensorboard",
+    wandb_project: Annotated[
+        str | None,
+        typer.Option(
+            "--wandb-project",
+            metavar="PROJECT",
+            help="--logger wandb: the W&B project (default: $WANDB_PROJECT, else stable-worldmodel).",
+            show_default=False,
+        ),
+    ] = None,
+    config_file: Annotated[
+        str | None,
+        typer.Option(
+            "--config",
+            metavar="FILE",
+            help=(
+                "A YAML (or JSON) file of the keys --set takes (flags' keys, trainer keys such as ckpt_every, config "
+                "fields; nested mappings are dotted keys); --set and the flags given override it."
+            ),
+            show_default=False,
+        ),
+    ] = None,
     settings: Annotated[
         list[str] | None,
         typer.Option(
             "--set",
             metavar="KEY=VALUE",
             help=(
-                "A config field of the model (repeatable), e.g. --set proprio_dim=2; VALUE is read as JSON when it "
-                "parses (see `swm show model MODEL` for the fields). A key that is also a flag (lr, steps, "
-                "batch_size, seed, device, frameskip...) sets that flag: giving both takes one value."
+                "A config field of the model or a training key (repeatable), e.g. --set proprio_dim=2 or --set "
+                "ckpt_every=500; VALUE is read as JSON when it parses (see `swm show model MODEL` for every key and "
+                "its meaning; vit_overrides.hidden_size=96 sets one entry of a mapping field). A key that is also a "
+                "flag (lr, steps, batch_size, seed, device, frameskip...) sets that flag: giving both takes one value."
             ),
             show_default=False,
         ),
@@ -343,7 +486,9 @@ def train_cmd(
 
     Example: swm train lewm --dataset tworoom --preset tiny --name tr-lewm
     (any config field: --set KEY=VALUE,
-    e.g. swm train tdmpc2 --dataset tr2 --set proprio_dim=2 --set goal_proprio_dim=2)
+    e.g. swm train tdmpc2 --dataset tr2 --set proprio_dim=2 --set goal_proprio_dim=2;
+    or a file of them: --config run.yaml, under --set and the flags given; every key with its meaning:
+    swm show model MODEL; W&B: --logger wandb, WANDB_MODE=offline without a network)
     (then: swm eval swm/TwoRoom-v2 --policy wm:tr-lewm; a gcbc / gcivl / gciql run: --policy gc:RUN;
     swm train frame --from tr-lewm trains the decoder that swm eval --video shows the predictions with).
     Several processes (DDP; --batch-size is the global batch):
@@ -351,8 +496,11 @@ def train_cmd(
     """
     import os
     import sys
+    from pathlib import Path
 
-    from ..train import train
+    from ..errors import ConfigError
+    from ..train import PYTHON_ONLY_KEYS, train
+    from ..train.run import check_logger
     from ..wm import get_config_class
     from .display import console
 
@@ -375,9 +523,28 @@ def train_cmd(
         "eval_env": eval_env,
         "frameskip": frameskip,
         "source": source,
+        "logger": logger,
+        "wandb_project": wandb_project,
     }
     given = {k for k in flags if k != "model" and _given(ctx, k)} | {"model"}
-    flags, overrides = merge_settings(flags, given, dict(_config_override(item) for item in settings or []))
+    from_set = dict(_config_override(item) for item in settings or [])
+    record: dict[str, object] = {}  # what protocol.json records of the config file
+    from_file_overrides: dict[str, object] = {}
+    if config_file is not None:  # under --set, under the flags given
+        from_file = load_config_file(config_file, model)
+        flags, from_file_overrides, overridden = apply_config_file(flags, given, from_file, f"--config {config_file}:")
+        overridden += [key for key in from_file if key in from_set and key not in overridden]
+        record["train_config"] = {
+            "file": str(Path(config_file).expanduser().resolve()),
+            "applied": {k: v for k, v in from_file.items() if k not in overridden},
+            "overridden": overridden,
+        }
+    flags, overrides = merge_settings(flags, given, from_set)
+    overrides = {**from_file_overrides, **overrides}
+    for key in PYTHON_ONLY_KEYS:
+        if key in overrides:
+            raise ConfigError(f"swm train takes no {key} (an argument of the Python API train() only)")
+    check_logger(flags["logger"])  # before anything is loaded (wandb must be installed)
     model, dataset, preset, source = flags.pop("model"), flags.pop("dataset"), flags.pop("preset"), flags["source"]
     for key in ("frameskip", "source"):  # config fields
         if flags[key] is not None:
@@ -400,6 +567,7 @@ def train_cmd(
             model,
             online,
             preset,
+            protocol_extra=record or None,
             seed_episodes=seed_episodes,
             collect_every=collect_every,
             episodes_per_collect=episodes_per_collect,
@@ -427,7 +595,7 @@ def train_cmd(
     overrides.setdefault("progress", sys.stderr.isatty())
     out = console()
     try:
-        result = train(model, dataset, preset, **flags, **overrides)
+        result = train(model, dataset, preset, **flags, **overrides, protocol_extra=record or None)
     except KeyboardInterrupt as exc:
         if not hasattr(exc, "swm_run"):
             raise

@@ -20,7 +20,7 @@ from ..wm.run import PROTOCOL_VERSION, lock_run
 if TYPE_CHECKING:  # pragma: no cover
     from .trainer import TrainResult
 
-__all__ = ["train"]
+__all__ = ["TRAIN_KEY_HELP", "train"]
 
 logger = logging.getLogger(__name__)
 
@@ -29,8 +29,45 @@ def _positive(name: str, value: Any) -> int | None:
     return None if value is None else check_int("train", name, value)
 
 
+#: one line per argument of :func:`train`: what it means (``swm show model TYPE`` prints them; every
+#: argument but ``eval_plan`` and ``protocol_extra`` is also a key of ``swm train --set`` / ``--config``)
+TRAIN_KEY_HELP: dict[str, str] = {
+    "model": "The model to train (a name of wm.list_models(); swm train's MODEL).",
+    "dataset": "Dataset in the cache to train on (a frame decoder defaults to its source run's).",
+    "preset": "Sizes and recipe: tiny (CPU, minutes), small (one GPU) or paper (upstream's).",
+    "steps": "Optimizer steps (default: the preset's); on --resume, a larger value extends the run.",
+    "epochs": "Passes over the train samples, instead of steps.",
+    "batch_size": "Samples per step, the global batch under torchrun (default: the preset's).",
+    "lr": "Peak learning rate (default: the preset's).",
+    "device": "auto, cpu, cuda, cuda:N or mps.",
+    "precision": "32, bf16 or 16 (16 needs CUDA).",
+    "name": "Run name, its folder under $STABLEWM_HOME/checkpoints (default: <dataset>-<model>).",
+    "seed": "Seed of the initial weights, the train/validation split and the batches.",
+    "resume": "Continue the run of that name from its last checkpoint.",
+    "init_from": "Start from this run's weights (fine-tuning; same model and sizes).",
+    "cache_dir": "Cache folder of datasets and checkpoints (default: $STABLEWM_HOME).",
+    "log_every": "Steps between two metrics records (train loss, learning rate, samples/s).",
+    "val_every": "Steps between two validation losses (0: only at the end; default: a tenth of the run).",
+    "ckpt_every": "Steps between two periodic checkpoints in step_<N>/ (0: only the last; default: a quarter).",
+    "progress": "Show a progress bar (swm train: when stderr is a terminal).",
+    "feature_cache": "Cache a frozen encoder's features on disk, once per dataset (false: encode every batch).",
+    "eval_every": "Evaluate the checkpoint in the env every K steps and at the end; keep the best as RUN/best.",
+    "eval_episodes": "Episodes per evaluation (with eval_every).",
+    "eval_env": "The env to evaluate in (with eval_every; default: the dataset's).",
+    "eval_plan": "Planner settings of the evaluations, a PlanSettings (Python API only).",
+    "logger": "Where metrics go besides metrics.jsonl/.csv: tensorboard, wandb (TensorBoard and W&B) or none.",
+    "wandb_project": "W&B project of the run with logger wandb (default: $WANDB_PROJECT or stable-worldmodel).",
+    "protocol_extra": "Entries added to protocol.json and the W&B config (Python API; swm train --config uses it).",
+}
+#: :data:`TRAIN_KEY_HELP` keys that ``swm train --set`` / ``--config`` do not take (Python objects)
+PYTHON_ONLY_KEYS = ("eval_plan", "protocol_extra")
+
+
 class _NoLog:
     """The metrics log of processes other than 0 under distributed training: writes nothing."""
+
+    closed = False
+    wandb = None
 
     def log(self, record: dict[str, Any]) -> None:
         pass
@@ -38,7 +75,7 @@ class _NoLog:
     def read(self) -> list[dict[str, Any]]:
         return []
 
-    def close(self) -> None:
+    def close(self, exit_code: int = 0) -> None:
         pass
 
 
@@ -67,6 +104,9 @@ def train(
     eval_episodes: int = 10,
     eval_env: str | None = None,
     eval_plan: Any = None,
+    logger: str = "tensorboard",
+    wandb_project: str | None = None,
+    protocol_extra: dict[str, Any] | None = None,
     **overrides: Any,
 ) -> TrainResult:
     """Train world model ``model`` (a name of ``stable_worldmodel.wm.list_models()``) on dataset ``dataset``.
@@ -92,6 +132,11 @@ def train(
     :class:`~stable_worldmodel.planning.learned.PlanSettings`); the success rate and its 95% interval
     are logged (``eval/...``) and the best checkpoint is kept as ``<run>/best`` (``swm eval --policy
     wm:RUN/best``).
+    ``logger`` says where the metrics go besides ``metrics.jsonl`` / ``metrics.csv`` (always written):
+    ``"tensorboard"`` (the default), ``"wandb"`` (TensorBoard and a Weights & Biases run named after
+    the run, in project ``wandb_project``, continued by ``resume=True``; ``WANDB_MODE=offline`` logs
+    without a network) or ``"none"``. ``protocol_extra`` entries are added to ``protocol.json`` (and the
+    W&B config). What each argument means: :data:`TRAIN_KEY_HELP`.
     """
     from .._device import resolve_device
     from ..wm import get_config
@@ -102,6 +147,17 @@ def train(
     _positive("batch_size", batch_size)
     _positive("eval_every", eval_every)
     _positive("eval_episodes", eval_episodes)
+    check_int("train", "log_every", log_every)
+    for key, value in (("val_every", val_every), ("ckpt_every", ckpt_every)):
+        if value is not None:
+            check_int("train", key, value, minimum=0)
+    from .run import check_logger
+
+    logger_name = check_logger(logger)
+    if wandb_project is not None and (not isinstance(wandb_project, str) or not wandb_project.strip()):
+        raise ConfigError(f"train requires wandb_project to be a non-empty name, got {wandb_project!r}")
+    if protocol_extra is not None and not isinstance(protocol_extra, dict):
+        raise ConfigError(f"train requires protocol_extra to be a dict, got {type(protocol_extra).__name__}")
     if epochs is not None and not (isinstance(epochs, (int, float)) and epochs > 0):
         raise ConfigError(f"train requires epochs > 0, got {epochs!r}")
     if steps is not None and epochs is not None:
@@ -144,6 +200,8 @@ def train(
             progress=progress,
             feature_cache=feature_cache,
             evaluation=(eval_every, eval_episodes, eval_env, eval_plan) if eval_every else None,
+            metrics_to=(logger_name, wandb_project),
+            protocol_extra=protocol_extra or {},
             cfg=cfg,
             dist_info=dist_info,
             dev=dev,
@@ -253,6 +311,8 @@ def _train_locked(
     progress,
     feature_cache,
     evaluation,
+    metrics_to,
+    protocol_extra,
     cfg,
     dist_info,
     dev,
@@ -330,6 +390,10 @@ def _train_locked(
         "final": None,  # set when the run ends: a run killed mid-way shows as partial
         "provenance": provenance(),  # versions, git commit, command line, host, start (and end) time
     }
+    taken = sorted(set(protocol_extra) & (set(protocol) | {"logger", "wandb", "steps_done", "best"}))
+    if taken:
+        raise ConfigError(f"train requires protocol_extra keys that protocol.json does not use itself, got {taken}")
+    protocol.update(protocol_extra)
     if init is not None:
         protocol["init_from"] = init
     if features is not None:
@@ -381,13 +445,46 @@ def _train_locked(
         protocol["evaluation"] = {"env": env, "every": every, "episodes": episodes, "seed": seed}
     if state is not None:  # the trainer was built for `steps`: an extended run's schedule is the new total's
         trainer.load_state_dict(state)
+    kind, project = metrics_to
+    protocol["logger"] = kind
+    log: Any = None
     try:
-        log = MetricsLog(folder, resume_step=trainer.step if resume else None) if dist_info.is_main else _NoLog()
+        if dist_info.is_main:
+            log = MetricsLog.open(
+                folder,
+                resume_step=trainer.step if resume else None,
+                logger=kind,
+                name=run,
+                project=project,
+                config=_wandb_config(protocol, trainer) if kind == "wandb" else None,
+            )
+        else:
+            log = _NoLog()
+        if log.wandb is not None:
+            protocol["wandb"] = {k: log.wandb[k] for k in ("id", "project", "mode", "url")}
         result = trainer.fit(log)
         result.features = features
         distributed.cleanup(dist_info)
         return result
-    except BaseException:
+    except BaseException as exc:
+        if log is not None:  # a W&B run finishes, marked failed (fit closed the log itself on a clean Ctrl-C)
+            log.close(exit_code=130 if isinstance(exc, KeyboardInterrupt) else 1)
         if dist_info.is_main and not resume and trainer.step == 0 and not any(folder.glob("*.pt")):
             shutil.rmtree(folder, ignore_errors=True)  # nothing worth keeping
         raise
+
+
+def _wandb_config(protocol: dict[str, Any], trainer: Any) -> dict[str, Any]:
+    """The W&B run's config: the resolved model config, the training arguments and the provenance."""
+    skip = ("config", "provenance", "train_episodes", "val_episodes", "final")
+    return {
+        "model_config": protocol.get("config"),
+        "train": {
+            **{k: v for k, v in protocol.items() if k not in skip},
+            "log_every": trainer.log_every,
+            "val_every": trainer.val_every,
+            "ckpt_every": trainer.ckpt_every,
+            "device": str(trainer.device),
+        },
+        "provenance": protocol.get("provenance"),
+    }

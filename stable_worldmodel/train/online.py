@@ -177,12 +177,16 @@ def train_online(
     progress: bool = True,
     log_every: int = 10,
     ckpt_every: int | None = None,
+    logger: str = "tensorboard",
+    wandb_project: str | None = None,
+    protocol_extra: dict[str, Any] | None = None,
     **overrides: Any,
 ) -> Any:
     """Train ``model`` online in ``env`` (module docstring); returns the
     :class:`~.trainer.TrainResult`. ``overrides`` set config fields as in
     :func:`~stable_worldmodel.train.train`; the run goes to ``<cache>/checkpoints/<name>/``
-    (default ``<env name>-<model>-online``)."""
+    (default ``<env name>-<model>-online``); ``logger``, ``wandb_project`` and ``protocol_extra`` as
+    :func:`~stable_worldmodel.train.train`'s."""
     import torch
 
     from .. import World
@@ -196,9 +200,9 @@ def train_online(
     from ..wm.base import Actor
     from ..wm.run import PROTOCOL_VERSION, lock_run
     from ..world.recording import record_episodes
-    from . import _check_run_folder
+    from . import _check_run_folder, _wandb_config
     from .data import TrainData
-    from .run import STATE_NAME, MetricsLog, load_train_state
+    from .run import STATE_NAME, MetricsLog, check_logger, load_train_state
     from .trainer import Trainer
 
     who = "train_online"
@@ -214,6 +218,7 @@ def train_online(
         check_int(who, key, value)
     if steps is not None:
         check_int(who, "steps", steps)
+    check_logger(logger)
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ConfigError(f"{who} requires seed to be an int >= 0, got {seed!r}")
     if batch_size is not None:
@@ -236,7 +241,7 @@ def train_online(
         raise ConfigError(f"{who} requires a plain run name (no path), got {run!r}")
     folder = wmu.checkpoint_root(cache_dir) / run
     lock = lock_run(folder, run)
-    world = writer = None
+    world = writer = log = None
     try:
         resume = _check_run_folder(folder, resume, run)
         size = (cfg.image_size, cfg.image_size)
@@ -295,7 +300,9 @@ def train_online(
                 "max_episode_steps": max_episode_steps,
             },
             "final": None,
+            "logger": logger,
         }
+        protocol = {**(protocol_extra or {}), **protocol}  # its own entries win
         trainer = Trainer(
             net,
             data,
@@ -320,7 +327,16 @@ def train_online(
                     f"got {steps}"
                 )
             trainer.load_state_dict(state)
-        log = MetricsLog(folder, resume_step=trainer.step if resume else None)
+        log = MetricsLog.open(
+            folder,
+            resume_step=trainer.step if resume else None,
+            logger=logger,
+            name=run,
+            project=wandb_project,
+            config=_wandb_config(protocol, trainer) if logger == "wandb" else None,
+        )
+        if log.wandb is not None:
+            protocol["wandb"] = {k: log.wandb[k] for k in ("id", "project", "mode", "url")}
         policy = ActorPolicy(net, data, cfg, dev)
 
         def collect(tr: Any) -> None:
@@ -336,10 +352,14 @@ def train_online(
             data.refresh()
             stats = _episode_stats(buffer, episodes_per_collect)
             log.log({"step": tr.step, **stats, "online/episodes": buffer.num_episodes})
-            logger.info("step %d: %s", tr.step, stats)
+            logging.getLogger(__name__).info("step %d: %s", tr.step, stats)  # `logger` is the argument here
 
         trainer.before_step = collect
         return trainer.fit(log)
+    except BaseException as exc:
+        if log is not None:  # a W&B run finishes, marked failed (fit closed the log itself on a clean Ctrl-C)
+            log.close(exit_code=130 if isinstance(exc, KeyboardInterrupt) else 1)
+        raise
     finally:
         if writer is not None:
             writer.close()

@@ -5,6 +5,8 @@ $STABLEWM_HOME/checkpoints/<run>/
     step_<N>/weights.pt + config.json          periodic checkpoints
     train_state.ckpt                           optimizer, scheduler, scaler, RNG, step (--resume)
     metrics.jsonl  metrics.csv  loss.png       what happened
+    tensorboard/                               TensorBoard events (logger "tensorboard" or "wandb")
+    wandb.json  wandb/                         the W&B run's id (resumed runs continue it) and files (logger "wandb")
 """
 
 from __future__ import annotations
@@ -18,7 +20,17 @@ from typing import Any
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["MetricsLog", "load_train_state", "plot_losses", "rng_state", "set_rng_state"]
+__all__ = [
+    "LOGGERS",
+    "MetricsLog",
+    "TensorBoardSink",
+    "WandbSink",
+    "check_logger",
+    "load_train_state",
+    "plot_losses",
+    "rng_state",
+    "set_rng_state",
+]
 
 STATE_NAME = "train_state.ckpt"
 #: version of the train state layout (1: tensors/numbers/strings only, RNG states as tensors)
@@ -114,11 +126,152 @@ def load_train_state(path: Path, map_location: Any = None) -> dict[str, Any]:
     return torch.load(path, map_location=map_location, weights_only=False)
 
 
+#: where a run's metrics go besides metrics.jsonl / metrics.csv (always written): ``tensorboard``
+#: (TensorBoard events in ``tensorboard/``), ``wandb`` (TensorBoard and a Weights & Biases run) or ``none``
+LOGGERS = ("tensorboard", "wandb", "none")
+#: the W&B project of a run when neither ``wandb_project`` nor ``$WANDB_PROJECT`` names one
+WANDB_PROJECT = "stable-worldmodel"
+#: the run folder's record of its W&B run (``--resume`` continues the run of that id)
+WANDB_RUN_FILE = "wandb.json"
+
+
+def check_logger(logger: Any) -> str:
+    """``logger`` when it is one of :data:`LOGGERS`, else an :class:`~stable_worldmodel.errors.UnknownNameError`
+    with a "did you mean"; ``wandb`` also requires the package (``pip install 'stable-worldmodel[wandb]'``)."""
+    from .._optional import is_available
+    from ..errors import DependencyNotInstalled, unknown_name
+
+    if not isinstance(logger, str) or logger not in LOGGERS:
+        raise unknown_name("logger", str(logger), LOGGERS)
+    if logger == "wandb" and not is_available("wandb"):
+        raise DependencyNotInstalled(
+            "The wandb logger (--logger wandb) requires the wandb package, which is not installed. "
+            "Install it with: pip install 'stable-worldmodel[wandb]'"
+        )
+    return logger
+
+
+def _scalars(record: dict[str, Any]) -> dict[str, float]:
+    """The finite numbers of ``record`` but its ``step``."""
+    return {
+        k: v
+        for k, v in record.items()
+        if k != "step" and isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+    }
+
+
+class TensorBoardSink:
+    """Mirrors each record's scalars to TensorBoard events in ``<run>/tensorboard`` (when
+    TensorBoard is installed: :meth:`open` returns None otherwise)."""
+
+    def __init__(self, writer: Any):
+        self.writer = writer
+
+    @classmethod
+    def open(cls, folder: Path) -> TensorBoardSink | None:
+        try:
+            from torch.utils.tensorboard import SummaryWriter
+
+            return cls(SummaryWriter(log_dir=str(folder / "tensorboard")))
+        except Exception:  # tensorboard is optional: any import or start-up failure means no mirror
+            return None
+
+    def log(self, record: dict[str, Any]) -> None:
+        for key, value in _scalars(record).items():
+            self.writer.add_scalar(key, value, record.get("step", 0))
+
+    def close(self, exit_code: int = 0) -> None:
+        self.writer.close()
+
+
+def _beside_other_runs(wandb: Any) -> dict[str, Any]:
+    """``wandb.init`` arguments that start a new run even when the process has one active (the
+    user's own): ``reinit="create_new"`` where wandb has it (0.19.10 and later)."""
+    try:
+        version = tuple(int(part) for part in wandb.__version__.split(".")[:3])
+    except ValueError:
+        return {}
+    return {"reinit": "create_new"} if version >= (0, 19, 10) else {}
+
+
+class WandbSink:
+    """Logs each record's scalars at its step to a Weights & Biases run named after the training run.
+
+    The run's config is ``config`` (the model config, the training arguments, the provenance);
+    its id is kept in ``<run>/wandb.json`` so that a resumed training run continues the same W&B
+    run. ``WANDB_MODE`` (``offline`` needs no network), ``WANDB_DIR`` (default: the run folder),
+    ``WANDB_ENTITY`` and the other ``WANDB_*`` variables apply as wandb reads them.
+    """
+
+    def __init__(self, run: Any, info: dict[str, Any]):
+        self.run, self.info = run, info
+        self._floor = int(getattr(run, "step", 0) or 0)  # a resumed W&B run refuses steps it has passed
+
+    @classmethod
+    def open(cls, folder: Path, *, name: str, project: str | None, config: dict[str, Any], resume: bool) -> WandbSink:
+        import os
+
+        from .._optional import require
+        from ..errors import ConfigError
+
+        wandb = require("wandb", "wandb", "--logger wandb")
+        project = project or os.environ.get("WANDB_PROJECT") or WANDB_PROJECT
+        record = folder / WANDB_RUN_FILE
+        previous: dict[str, Any] = {}
+        if resume and record.is_file():
+            try:
+                previous = json.loads(record.read_text())
+            except (OSError, ValueError):
+                logger.warning("%s is unreadable: the resumed run starts a new W&B run", record)
+        run_id = previous.get("id") if previous.get("project", project) == project else None
+        try:
+            run = wandb.init(
+                project=project,
+                name=name,
+                id=run_id,
+                resume="allow" if run_id else None,
+                config=config,
+                # read here, not once per process as wandb's settings are: each run honours the current ones
+                dir=os.environ.get("WANDB_DIR") or str(folder),
+                mode=os.environ.get("WANDB_MODE") or None,
+                **_beside_other_runs(wandb),
+            )
+        except Exception as exc:  # no login, no network in online mode, a bad entity...
+            raise ConfigError(
+                f"--logger wandb requires a W&B run, got {type(exc).__name__}: {' '.join(str(exc).split())[:300]} "
+                "(log in with `wandb login`, or set WANDB_MODE=offline to log without a network)"
+            ) from exc
+        info = {
+            "id": run.id,
+            "project": project,
+            "name": name,
+            "mode": str(getattr(run.settings, "mode", "") or os.environ.get("WANDB_MODE", "online")),
+            "url": getattr(run, "url", None),
+            "dir": str(Path(run.dir).parent),
+        }
+        record.write_text(json.dumps(info, indent=2) + "\n")
+        return cls(run, info)
+
+    def log(self, record: dict[str, Any]) -> None:
+        step = int(record.get("step", 0))
+        values = _scalars(record)
+        if values and step >= self._floor:
+            self.run.log(values, step=step)
+
+    def close(self, exit_code: int = 0) -> None:
+        self.run.finish(exit_code=exit_code)
+
+
 class MetricsLog:
     """Appends one JSON line per record to ``metrics.jsonl`` and rewrites ``metrics.csv`` on
-    :meth:`close`; mirrors scalars to TensorBoard when it is installed."""
+    :meth:`close`; passes every record to its ``sinks`` too (default: TensorBoard when it is
+    installed; :meth:`open` picks them by the ``logger`` name, :data:`LOGGERS`).
 
-    def __init__(self, folder: Path, resume_step: int | None = None):
+    :meth:`close` is called once whatever happens (it does nothing the second time): with
+    ``exit_code`` 0 when the run ended or stopped cleanly, else the W&B run is marked failed.
+    """
+
+    def __init__(self, folder: Path, resume_step: int | None = None, sinks: list[Any] | None = None):
         self.folder = folder
         self.path = folder / "metrics.jsonl"
         if resume_step is None:
@@ -127,13 +280,47 @@ class MetricsLog:
             kept = [r for r in self.read() if r.get("step", 0) <= resume_step]
             self.path.write_text("".join(json.dumps(r) + "\n" for r in kept))
         self._file = self.path.open("a")
-        self._tb = None
-        try:
-            from torch.utils.tensorboard import SummaryWriter
+        self.closed = False
+        self.sinks = [s for s in ([TensorBoardSink.open(folder)] if sinks is None else sinks) if s is not None]
 
-            self._tb = SummaryWriter(log_dir=str(folder / "tensorboard"))
-        except Exception:  # tensorboard is optional: any import or start-up failure means no mirror
-            self._tb = None
+    @classmethod
+    def open(
+        cls,
+        folder: Path,
+        *,
+        resume_step: int | None = None,
+        logger: str = "tensorboard",
+        name: str | None = None,
+        project: str | None = None,
+        config: dict[str, Any] | None = None,
+    ) -> MetricsLog:
+        """The metrics log of run folder ``folder`` with the sinks of ``logger`` (:data:`LOGGERS`):
+        ``name`` / ``project`` / ``config`` are the W&B run's (``logger="wandb"``)."""
+        check_logger(logger)
+        sinks: list[Any] = []
+        if logger in ("tensorboard", "wandb"):
+            sinks.append(TensorBoardSink.open(folder))
+        log = cls(folder, resume_step=resume_step, sinks=sinks)
+        if logger == "wandb":
+            try:
+                log.sinks.append(
+                    WandbSink.open(
+                        folder,
+                        name=name or folder.name,
+                        project=project,
+                        config=config or {},
+                        resume=resume_step is not None,
+                    )
+                )
+            except BaseException:
+                log.close(exit_code=1)
+                raise
+        return log
+
+    @property
+    def wandb(self) -> dict[str, Any] | None:
+        """The W&B run's id, project, mode, URL and folder (None without one)."""
+        return next((s.info for s in self.sinks if isinstance(s, WandbSink)), None)
 
     def read(self) -> list[dict[str, Any]]:
         if not self.path.is_file():
@@ -143,21 +330,28 @@ class MetricsLog:
     def log(self, record: dict[str, Any]) -> None:
         self._file.write(json.dumps(record) + "\n")
         self._file.flush()
-        if self._tb is not None:
-            for key, value in record.items():
-                if key != "step" and isinstance(value, (int, float)) and math.isfinite(value):
-                    self._tb.add_scalar(key, value, record.get("step", 0))
+        for sink in self.sinks:
+            sink.log(record)
 
-    def close(self) -> None:
+    def close(self, exit_code: int = 0) -> None:
+        """Close the file and the sinks (a W&B run finishes with ``exit_code``) and write metrics.csv."""
+        if self.closed:
+            return
+        self.closed = True
         self._file.close()
-        if self._tb is not None:
-            self._tb.close()
-        records = self.read()
-        fields = sorted({k for r in records for k in r}, key=lambda k: (k != "step", k))
-        with (self.folder / "metrics.csv").open("w", newline="") as f:
-            writer = csv.DictWriter(f, fieldnames=fields)
-            writer.writeheader()
-            writer.writerows(records)
+        try:
+            for sink in self.sinks:
+                try:
+                    sink.close(exit_code)
+                except Exception as exc:  # one sink failing to close must not lose the others nor the CSV
+                    logger.warning("Closing the %s logger failed: %s", type(sink).__name__, exc)
+        finally:
+            records = self.read()
+            fields = sorted({k for r in records for k in r}, key=lambda k: (k != "step", k))
+            with (self.folder / "metrics.csv").open("w", newline="") as f:
+                writer = csv.DictWriter(f, fieldnames=fields)
+                writer.writeheader()
+                writer.writerows(records)
 
 
 def plot_losses(records: list[dict[str, Any]], path: Path, title: str) -> Path | None:

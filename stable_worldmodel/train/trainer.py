@@ -415,7 +415,7 @@ class Trainer:
                 if stop.requested and self.step < self.steps:  # Ctrl-C: between two steps, the state is whole
                     if not saved:
                         self.save()
-                    log.close()
+                    log.close(exit_code=130)  # a W&B run shows as stopped early (resume continues it)
                     exc = KeyboardInterrupt()
                     exc.swm_run = (self.run, self.folder, self.step, self.steps, True)
                     raise exc

@@ -75,6 +75,25 @@ class WorldModelConfig:
     #: planning may aim at waypoints of the training data (``--subgoals graph|auto``)
     subgoal_graph: ClassVar[bool] = False
 
+    #: one line per field: what it means (``swm show model TYPE`` prints it; :meth:`field_help` merges
+    #: the classes' tables, a subclass's entry replacing its base's). Every field has one (a test checks).
+    FIELD_HELP: ClassVar[dict[str, str]] = {
+        "image_size": "Side of the square frames the model sees, in pixels.",
+        "history_size": "Context frames per training sample (the frames the model conditions on).",
+        "num_preds": "Frames predicted per training sample after the context.",
+        "frameskip": "Env steps per model step: each model action is a block of frameskip env actions.",
+        "image_mean": "Per-channel mean subtracted from the pixels (in [0, 1]).",
+        "image_std": "Per-channel scale dividing the pixels (in [0, 1], after the mean).",
+        "batch_size": "Samples per optimizer step (the global batch under torchrun).",
+        "lr": "Peak learning rate of AdamW (linear warmup, then cosine decay to 0).",
+        "weight_decay": "AdamW weight decay of the weight matrices (none on biases, norms and embeddings).",
+        "warmup_steps": "Steps of linear learning-rate warmup.",
+        "steps": "Optimizer steps of a run (--steps / --epochs override it).",
+        "grad_clip": "Largest gradient norm; larger gradients are scaled down (0: no clipping).",
+        "val_fraction": "Fraction of the dataset's episodes held out for the validation loss.",
+        "encoder_lr_scale": "Learning-rate factor of the parameters under encoder. (1: the same as the rest).",
+    }
+
     image_size: int = 64
     history_size: int = 1
     num_preds: int = 1
@@ -115,20 +134,73 @@ class WorldModelConfig:
         return {}
 
     @classmethod
+    def field_help(cls) -> dict[str, str]:
+        """``{field: meaning}`` of every field of this config, from the ``FIELD_HELP`` tables of its
+        classes (a subclass's entry replaces its base's)."""
+        merged: dict[str, str] = {}
+        for klass in reversed(cls.__mro__):
+            merged.update(klass.__dict__.get("FIELD_HELP") or {})
+        return {f.name: merged.get(f.name, "") for f in dataclasses.fields(cls) if f.init}
+
+    @classmethod
+    def field_default(cls, name: str) -> Any:
+        """The default of field ``name`` as declared on the class (``dataclasses.MISSING`` when it has none)."""
+        for f in dataclasses.fields(cls):
+            if f.name == name:
+                if f.default_factory is not dataclasses.MISSING:
+                    return f.default_factory()
+                return f.default
+        raise KeyError(name)
+
+    @classmethod
+    def unknown_key(cls, key: str) -> str | None:
+        """Why ``key`` is not an override of this config (``None``: it is), with a "did you mean".
+
+        A key is a field name, or ``FIELD.KEY[.KEY...]`` into a field that holds a mapping
+        (``vit_overrides.num_hidden_layers``, ``loss_weights.std_loss``)."""
+        names = [f.name for f in dataclasses.fields(cls) if f.init]
+        if key in names:
+            return None
+        head, dot, _ = key.partition(".")
+        if dot and head in names and isinstance(cls.field_default(head), Mapping):
+            return None
+        leaf = key.rpartition(".")[2]  # predictor.depth: the field is depth
+        hint = f" Did you mean {leaf!r}?" if dot and leaf in names else did_you_mean(key, names)
+        return f"{cls.__name__} has no field {key!r}.{hint} Fields: {', '.join(sorted(names))}"
+
+    @classmethod
     def from_preset(cls, preset: str = "tiny", **overrides: Any) -> WorldModelConfig:
-        """The config of ``preset`` with ``overrides`` (unknown fields get a "did you mean" error)."""
+        """The config of ``preset`` with ``overrides`` (unknown fields get a "did you mean" error).
+
+        A dotted key sets one entry of a field that holds a mapping, on top of the preset's value
+        (``**{"vit_overrides.num_hidden_layers": 4}``); a plain key replaces the field."""
         if preset not in cls.presets:
             raise ConfigError(
                 f"{cls.model_name} requires preset in {sorted(cls.presets)}, got "
                 f"{preset!r}.{did_you_mean(preset, cls.presets)}"
             )
-        names = {f.name for f in dataclasses.fields(cls)}
         for key in overrides:
-            if key not in names:
-                raise ConfigError(
-                    f"{cls.__name__} has no field {key!r}.{did_you_mean(key, names)} Fields: {', '.join(sorted(names))}"
-                )
-        return cls(**{**cls.presets[preset], **overrides})
+            problem = cls.unknown_key(key)
+            if problem:
+                raise ConfigError(problem)
+        values = dict(cls.presets[preset])
+        for key, value in overrides.items():
+            if "." not in key:
+                values[key] = value
+                continue
+            head, *path, leaf = key.split(".")
+            base = values[head] if head in values else cls.field_default(head)
+            if not isinstance(base, Mapping):
+                raise ConfigError(f"{cls.__name__} requires a mapping in {head!r} to set {key!r}, got {base!r}")
+            root = node = dict(base)
+            for part in path:
+                child = node.get(part, {})
+                if not isinstance(child, Mapping):
+                    raise ConfigError(f"{cls.__name__} requires a mapping at {part!r} to set {key!r}, got {child!r}")
+                node[part] = node = dict(child)
+            node[leaf] = value
+            values[head] = root
+        return cls(**values)
 
     @classmethod
     def subgoal_graph_unavailable(cls, config: Mapping[str, Any]) -> str | None:

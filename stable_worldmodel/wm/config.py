@@ -67,6 +67,14 @@ class PredictorConfig(WorldModelConfig):
     """A config with a transformer predictor (or transformer heads): ``depth`` layers of ``heads``
     heads of ``dim_head``, MLP ``mlp_dim``, ``dropout``."""
 
+    FIELD_HELP: ClassVar[dict[str, str]] = {
+        "depth": "Transformer layers of the predictor (or of the heads).",
+        "heads": "Attention heads per transformer layer.",
+        "dim_head": "Width of each attention head.",
+        "mlp_dim": "Hidden width of the transformer's MLP blocks.",
+        "dropout": "Dropout probability in the transformer (0 <= p < 1).",
+    }
+
     depth: int = 2
     heads: int = 4
     dim_head: int = 16
@@ -98,6 +106,15 @@ class ImageEncoderConfig(WorldModelConfig):
     """A config with a trained image encoder: ``encoder`` ("cnn" or "vit"), ``embed_dim`` (D; the
     CNN's output width), CNN ``cnn_width``, ViT ``vit_size`` / ``patch_size`` / ``vit_overrides``
     (ViTConfig fields)."""
+
+    FIELD_HELP: ClassVar[dict[str, str]] = {
+        "encoder": "Image encoder trained with the model: cnn (a strided CNN) or vit (a ViT from scratch).",
+        "embed_dim": "Width D of the embeddings (also the CNN encoder's output width).",
+        "cnn_width": "Channels of the CNN encoder's first stage (doubled per stage, up to 8x).",
+        "vit_size": "ViT size with encoder=vit: tiny, small, base, large or huge.",
+        "patch_size": "Side of the ViT's square patches, in pixels.",
+        "vit_overrides": "ViTConfig fields replacing the size's (e.g. num_hidden_layers), with encoder=vit.",
+    }
 
     encoder: str = "cnn"
     embed_dim: int = 64
@@ -158,6 +175,10 @@ class JEPAConfig(ImageEncoderConfig, PredictorConfig):
 
     #: planning may aim at waypoints of the training data (the embedding of a frame is a goal)
     subgoal_graph: ClassVar[bool] = True
+
+    FIELD_HELP: ClassVar[dict[str, str]] = {
+        "projector_hidden": "Hidden width of the projector heads (0: no projectors; the encoder width must be D).",
+    }
 
     projector_hidden: int = 256
 

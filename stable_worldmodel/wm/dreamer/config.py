@@ -93,6 +93,20 @@ class DreamerConfig(ImageEncoderConfig):
         },
     }
 
+    FIELD_HELP: ClassVar[dict[str, str]] = {
+        "deter_dim": "Width of the GRU's deterministic state h.",
+        "stoch_dim": "Width of the diagonal-Gaussian stochastic state z.",
+        "hidden": "Hidden units of the prior and posterior MLPs.",
+        "min_std": "Smallest standard deviation of the stochastic state.",
+        "kl_dyn": "Weight of the dynamics KL term, KL(sg(posterior) || prior).",
+        "kl_rep": "Weight of the representation KL term, KL(posterior || sg(prior)).",
+        "free_bits": "Nats of KL below which the KL terms are not penalised.",
+        "recon_coef": "Weight of the frame-reconstruction loss.",
+        "reward_head": "Train a reward head too (the dataset must have a reward column).",
+        "reward_coef": "Weight of the reward loss (with reward_head).",
+        "embed_coef": "Weight of the embedding head's loss (it predicts a frame's embedding, for planning).",
+    }
+
     deter_dim: int = 64
     stoch_dim: int = 16
     hidden: int = 64

@@ -38,6 +38,15 @@ class FrameConfig(WorldModelConfig):
         "paper": {"width": 64, "steps": 20000, "batch_size": 128, "lr": 3e-4},
     }
 
+    FIELD_HELP: ClassVar[dict[str, str]] = {
+        "source": "The run whose latents the decoder learns to turn into frames (required: --from RUN).",
+        "width": "Channels of the decoder's last upsampling stage (earlier stages double it, up to 8x).",
+        "embed_dim": "The source run's embedding width (read from its protocol.json; not set by hand).",
+        "image_size": "Side of the frames, in pixels (read from the source run's protocol.json).",
+        "image_mean": "Per-channel mean of the pixels (read from the source run's protocol.json).",
+        "image_std": "Per-channel scale of the pixels (read from the source run's protocol.json).",
+    }
+
     source: str = ""
     width: int = 16
     #: the source run's embedding width (set from its protocol, not by the user)

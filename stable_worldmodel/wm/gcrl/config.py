@@ -142,6 +142,23 @@ class GCRLConfig(ImageEncoderConfig, PredictorConfig):
     #: ``swm eval --policy gc:RUN`` acts with these checkpoints
     eval_prefix: ClassVar[str] = "gc"
 
+    FIELD_HELP: ClassVar[dict[str, str]] = {
+        "pool_type": "How the action head pools a frame's tokens: attention or mean.",
+        "value_head": "Value head (gcivl, gciql): transformer (mean-pooled) or metric (a distance of embeddings).",
+        "metric_dim": "Width of the metric value head's embeddings (value_head=metric).",
+        "q_hidden": "Hidden width of the critic's MLP (gciql).",
+        "discount": "Discount of the TD targets (gcivl, gciql).",
+        "expectile": "Expectile of the value regression (gcivl, gciql).",
+        "awr_alpha": "Inverse temperature of the advantage-weighted actor (gcivl, gciql).",
+        "actor_encoder_grad": "Whether the actor term trains the image encoder too (gcivl, gciql).",
+        "value_ema": "EMA coefficient of the target value and critic heads.",
+        "log_std_min": "Lower clip of the policy's log standard deviation.",
+        "log_std_max": "Upper clip of the policy's log standard deviation.",
+        "goal_probabilities": "How hindsight goals are drawn: {random, geometric, uniform, current: p}, summing to 1.",
+        "actor_goal_probabilities": "Goal mixture of the actor term, as goal_probabilities (empty: the same goals).",
+        "goal_gamma": "Geometric goal sampling: the goal is k ~ Geometric(1 - goal_gamma) frames ahead.",
+    }
+
     pool_type: str = "attention"
     value_head: str = "transformer"
     metric_dim: int = 64

@@ -65,6 +65,11 @@ class LeWMConfig(JEPAConfig):
         },
     }
 
+    FIELD_HELP: ClassVar[dict[str, str]] = {
+        "sigreg_weight": "Weight of SIGReg, the loss pulling the embeddings towards an isotropic Gaussian.",
+        "sigreg_num_proj": "Random directions SIGReg tests the embeddings' distribution along, per step.",
+    }
+
     sigreg_weight: float = 0.09
     sigreg_num_proj: int = 1024
 

@@ -60,6 +60,11 @@ class PLDMConfig(JEPAConfig):
         },
     }
 
+    FIELD_HELP: ClassVar[dict[str, str]] = {
+        "idm_hidden": "Hidden width of the inverse-dynamics MLP predicting the action block (0: no such term).",
+        "loss_weights": "Weights of the loss terms by name, over pldm.DEFAULT_LOSS_WEIGHTS (e.g. std_loss, idm_loss).",
+    }
+
     idm_hidden: int = 128
     loss_weights: dict[str, float] = field(default_factory=dict)
 

@@ -100,6 +100,22 @@ class PreJEPAConfig(PredictorConfig):
     #: planning may aim at waypoints (without proprio: see :meth:`subgoal_graph_unavailable`)
     subgoal_graph: ClassVar[bool] = True
 
+    FIELD_HELP: ClassVar[dict[str, str]] = {
+        "backbone": "Frozen image encoder: a name of wm.backbones.list_backbones() (cnn_aa, blur, dinov2_small...).",
+        "embed_dim": "Token width of the cnn and cnn_aa backbones.",
+        "cnn_width": "Channels of the cnn / cnn_aa backbone's first conv.",
+        "backbone_path": "File or folder of the backbone's weights (default: $STABLEWM_HOME/backbones/).",
+        "pretrained": "Load the backbone's pretrained weights from disk (never downloaded); else random.",
+        "backbone_overrides": "transformers config fields of a randomly initialised backbone.",
+        "cnn_grid": "Side of the token grid of the cnn, cnn_aa and blur backbones (cnn_grid**2 tokens).",
+        "blur_sigma": "Blur of the blur backbone, in pixels (0: image_size / 8).",
+        "blur_pool": "Pooling factor of the blur backbone.",
+        "action_emb_dim": "Width of the action embedding appended to each token.",
+        "proprio_dim": "Numbers of the dataset's proprio column the model reads (0: pixels only).",
+        "proprio_emb_dim": "Width of the proprio embedding appended to each token.",
+        "interpolate_pos_encoding": "Interpolate a ViT backbone's position embeddings to image_size.",
+    }
+
     backbone: str = "cnn"
     embed_dim: int = 64
     cnn_width: int = 8

@@ -96,6 +96,35 @@ class TDMPC2Config(WorldModelConfig):
         },
     }
 
+    FIELD_HELP: ClassVar[dict[str, str]] = {
+        "pixel_encoder": "Pixel encoder: conv (a CNN of cnn_width) or tdmpc2 (upstream's; image_size >= 35).",
+        "cnn_width": "Channels of the conv pixel encoder's first stage.",
+        "num_channels": "Channels of upstream's CNN (pixel_encoder=tdmpc2).",
+        "embed_dim": "Width L of the pixel latent (the latent is a multiple of simnorm_dim).",
+        "mlp_dim": "Hidden width of the dynamics, reward, policy and Q MLPs.",
+        "enc_dim": "Hidden width of the encoders of proprio and goal_proprio.",
+        "num_q": "Q heads of the ensemble (>= 2).",
+        "q_dropout": "Dropout of the Q heads.",
+        "num_bins": "Two-hot bins of the reward and Q heads, over [vmin, vmax] in symlog space.",
+        "vmin": "Lowest bin of the reward and Q heads (symlog space).",
+        "vmax": "Highest bin of the reward and Q heads (symlog space).",
+        "simnorm_dim": "Group size of the latent's simplicial normalisation (SimNorm).",
+        "proprio_dim": "Numbers of the dataset's proprio column the model reads (0: pixels only).",
+        "proprio_emb_dim": "Width of the encoding of proprio and of goal_proprio.",
+        "goal_proprio_dim": "Numbers of the goal_proprio column, the episode's goal (0: none).",
+        "rho": "Weight rho**t of the loss terms at step t of the horizon.",
+        "discount": "Discount of the TD targets.",
+        "tau": "EMA rate of the target Q heads and of the Q scale.",
+        "entropy_coef": "Entropy bonus of the policy prior.",
+        "consistency_coef": "Weight of the latent-dynamics consistency loss.",
+        "reward_coef": "Weight of the reward loss.",
+        "value_coef": "Weight of the Q loss.",
+        "bc_coef": "Weight of imitating the dataset's actions in the prior's loss (0: upstream's loss).",
+        "uncertainty_penalty": "Penalty on the Q heads' disagreement in the terminal value when planning.",
+        "num_pi_trajs": "Prior samples averaged by get_action (acting without planning).",
+        "num_preds": "Transitions per training sample (upstream's horizon).",
+    }
+
     pixel_encoder: str = "conv"
     cnn_width: int = 8
     num_channels: int = 32
