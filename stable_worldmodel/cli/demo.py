@@ -11,13 +11,15 @@
 
 from __future__ import annotations
 
+import contextlib
+import itertools
 import json
 import shutil
 import sys
 import tempfile
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -108,6 +110,40 @@ def _write_results(
     path.write_text(json.dumps(record, indent=2) + "\n")
 
 
+def claim_run_name(root: Path, base: str) -> str:
+    """The first of ``base``, ``base-2``, ``base-3``, ... that no run uses, claimed by creating its empty folder
+    (atomic: two demos started together get two names; ``swm train`` accepts an empty run folder)."""
+    root.mkdir(parents=True, exist_ok=True)
+    for k in itertools.count(1):
+        name = base if k == 1 else f"{base}-{k}"
+        try:
+            (root / name).mkdir()
+        except FileExistsError:
+            continue
+        return name
+    raise AssertionError("unreachable")  # pragma: no cover
+
+
+@contextlib.contextmanager
+def _demo_lock(dataset: Path, con: Any):
+    """Held while this demo records ``dataset``: a second demo with the same settings waits here, then finds
+    the dataset complete (recording resumes to the episodes asked, so it adds none)."""
+    from ..data._lock import WriterLock
+    from ..errors import DatasetBusyError
+
+    dataset.parent.mkdir(parents=True, exist_ok=True)
+    marker = dataset.with_name(dataset.name + ".demo")
+    try:
+        lock = WriterLock(marker, busy=DatasetBusyError).acquire()  # the error's text: the holder
+    except DatasetBusyError as holder:
+        con.print(f"Waiting for another swm demo recording {dataset.name} ({holder})", soft_wrap=True)
+        lock = WriterLock(marker, wait=True).acquire()
+    try:
+        yield
+    finally:
+        lock.release()
+
+
 def demo(
     env: Annotated[
         str, typer.Option("--env", metavar="ENV", help="Environment id (it needs an expert; see `swm envs`).")
@@ -158,7 +194,7 @@ def demo(
 
     Example: swm demo --env swm/TwoRoom-v2 --episodes 300 --out demo_outputs
     """
-    from ..data import dataset_info, delete_dataset
+    from ..data import dataset_info
     from ..data.utils import resolve_dataset_path
     from ..planning.policies import (
         episode_limit,
@@ -183,18 +219,19 @@ def demo(
         )  # a frame decoder needs a source run
     out = output_dir(out, "swm demo --out")
     con = console()
-    name = "demo-" + default_dataset_name(env, "expert")
+    # its own names: the dataset is named by everything that decides its content (a rerun reuses it, a recording
+    # killed midway is completed), the run is a fresh name claimed for this invocation (nothing is deleted)
+    name = f"demo-{default_dataset_name(env, 'expert')}-{episodes}x{max_steps}-seed{seed}-{image_size}px"
     total = 5 if learn else 4
     step = iter(range(1, total + 1))
 
     con.rule(f"[{next(step)}/{total}] Recording {episodes} expert episodes of {env}")
-    if resolve_dataset_path(name).exists():
-        delete_dataset(name)
-    with make_world(env, min(4, episodes), image_size, max_steps, seed=seed) as world:
-        world.set_policy(
-            make_policy("expert", env, seed=seed, noise=recording_noise("expert", env, None))
-        )  # as swm collect
-        dataset = world.record_dataset(name, episodes=episodes, seed=seed)
+    with _demo_lock(resolve_dataset_path(name), con):
+        with make_world(env, min(4, episodes), image_size, max_steps, seed=seed) as world:
+            world.set_policy(
+                make_policy("expert", env, seed=seed, noise=recording_noise("expert", env, None))
+            )  # as swm collect
+            dataset = world.record_dataset(name, episodes=episodes, seed=seed)
     display_dataset_info(dataset_info(name))
 
     policies: list[tuple[str, str, object]] = [(p, p, None) for p in POLICY_ORDER]  # (label, policy, plan)
@@ -204,9 +241,8 @@ def demo(
         from ..train import train
         from ..wm.utils import checkpoint_root
 
-        run = f"demo-{model}"
-        con.rule(f"[{next(step)}/{total}] Training a tiny {model} on {name}")
-        shutil.rmtree(checkpoint_root() / run, ignore_errors=True)
+        run = claim_run_name(checkpoint_root(), f"demo-{model}")
+        con.rule(f"[{next(step)}/{total}] Training a tiny {model} on {name} (run {run})")
         result = train(model, name, "tiny", steps=train_steps, name=run, seed=seed, progress=sys.stderr.isatty())
         con.print(
             f"{result.steps} steps in {result.seconds:.0f} s ({result.samples_per_second:.0f} samples/s), "

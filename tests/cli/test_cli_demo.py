@@ -11,6 +11,8 @@ from stable_worldmodel.cli.stats import SuccessSummary, wilson_interval
 from stable_worldmodel.data import dataset_info, list_datasets
 
 BASE = ("--env", "swm/Toy-v0", "--episodes", "2", "--eval-episodes", "4", "--image-size", "16", "--max-steps", "12")
+#: the demo's dataset for BASE: named by what decides its content (env, episodes x max steps, seed, image size)
+DATASET = "demo-toy-v0-expert-2x12-seed0-16px"
 #: no training: what the tests of the collect / evaluate / plot steps need
 TINY = (*BASE, "--model", "none")
 #: the whole loop with a dummy world model, a few steps and a small CEM
@@ -26,9 +28,9 @@ def test_demo_writes_videos_plot_results_and_one_last_line(swm, tmp_path):
     stdout = result.stdout
 
     # the dataset: recorded, kept in the cache, shown
-    assert list_datasets() == ["demo-toy-v0-expert"]
-    assert dataset_info("demo-toy-v0-expert")["num_episodes"] == 2
-    assert "dataset demo-toy-v0-expert" in stdout
+    assert list_datasets() == [DATASET]
+    assert dataset_info(DATASET)["num_episodes"] == 2
+    assert f"dataset '{DATASET}'" in stdout
 
     # one MP4 per policy, readable, at most max_steps + 1 frames
     for policy in ("random", "expert", "dummy+cem"):
@@ -70,7 +72,7 @@ def test_demo_writes_videos_plot_results_and_one_last_line(swm, tmp_path):
         "dummy+cem.mp4",
         "success_rates.png",
         "results.json",
-        "demo-toy-v0-expert",
+        DATASET,
         model["checkpoint"],
     ):
         assert name in last
@@ -87,10 +89,55 @@ def test_demo_with_a_jepa_model_also_plans_with_subgoals(swm, tmp_path):
     assert (out / "lewm+cem+graph.mp4").is_file()
 
 
-def test_demo_rerun_replaces_its_dataset(swm, tmp_path):
-    for _ in range(2):
-        assert swm("demo", *TINY, "--out", str(tmp_path / "d")).exit_code == 0
-    assert dataset_info("demo-toy-v0-expert")["num_episodes"] == 2
+def test_demo_rerun_reuses_its_dataset_and_never_deletes_a_run(swm, tmp_path):
+    from stable_worldmodel.wm.utils import checkpoint_root
+
+    first = swm("demo", *LEARNED, "--out", str(tmp_path / "d"))
+    assert first.exit_code == 0, first.output
+    weights = checkpoint_root() / "demo-dummy" / "weights.pt"
+    before = (weights.read_bytes(), weights.stat().st_mtime_ns)
+    data = dataset_info(DATASET)
+    second = swm("demo", *LEARNED, "--out", str(tmp_path / "d"))
+    assert second.exit_code == 0, second.output
+    assert (weights.read_bytes(), weights.stat().st_mtime_ns) == before  # the first run is untouched
+    assert json.loads((tmp_path / "d" / "results.json").read_text())["model"]["run"] == "demo-dummy-2"
+    assert dataset_info(DATASET) == data and list_datasets() == [DATASET]  # reused as it was
+    # other settings, another dataset
+    assert swm("demo", *TINY, "--seed", "1", "--out", str(tmp_path / "e")).exit_code == 0
+    assert list_datasets() == sorted([DATASET, DATASET.replace("seed0", "seed1")])
+
+
+def test_run_names_are_claimed_once(tmp_path):
+    from stable_worldmodel.cli.demo import claim_run_name
+
+    (tmp_path / "demo-lewm").mkdir(parents=True)
+    assert [claim_run_name(tmp_path, "demo-lewm") for _ in range(2)] == ["demo-lewm-2", "demo-lewm-3"]
+    assert claim_run_name(tmp_path, "demo-pldm") == "demo-pldm"
+
+
+def test_a_second_demo_waits_for_the_first_recording(tmp_path):
+    import os
+    import subprocess
+    import sys
+    import time
+
+    from stable_worldmodel.data._lock import WriterLock
+
+    home = tmp_path / "home"
+    home.mkdir()
+    lock = WriterLock(home / f"{DATASET}.h5.demo").acquire()  # as a first demo recording DATASET holds it
+    env = {**os.environ, "STABLEWM_HOME": str(home)}
+    code = "from stable_worldmodel.cli import main; raise SystemExit(main())"
+    args = [sys.executable, "-c", code, "demo", *TINY, "--out", str(tmp_path / "d")]
+    proc = subprocess.Popen(args, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        time.sleep(3)
+        assert proc.poll() is None and not (home / f"{DATASET}.h5").exists()  # waiting, nothing written
+    finally:
+        lock.release()
+    out, _ = proc.communicate(timeout=120)
+    assert proc.returncode == 0, out
+    assert "Waiting for another swm demo recording" in out
 
 
 def test_demo_random_and_expert_share_seeds(swm, tmp_path):
