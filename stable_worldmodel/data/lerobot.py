@@ -43,6 +43,7 @@ import io
 import json
 import logging
 import os
+import weakref
 from collections import OrderedDict
 from collections.abc import Callable, Collection, Mapping, Sequence
 from pathlib import Path
@@ -264,6 +265,20 @@ def decode_image(value: Any, root: Path, channels: int) -> np.ndarray:
 
 
 _INHERITED: list[Any] = []  # video containers a forked process inherited: kept, unused
+_LIVE: weakref.WeakSet[VideoFrames] = weakref.WeakSet()  # every VideoFrames of this process
+
+
+def _close_before_fork() -> None:
+    """Close this process's open videos before it forks (a DataLoader starting its workers): FFmpeg's
+    decoder threads are joined, so no child starts from a copy of a decoder some thread was inside
+    (a worker then crashed with SIGSEGV, now and then, on a loaded machine). They reopen when read."""
+    for frames in list(_LIVE):
+        if frames._pid == os.getpid():  # inherited ones stay untouched (module docstring of _INHERITED)
+            frames.close()
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(before=_close_before_fork)
 
 
 class VideoFrames:
@@ -272,6 +287,7 @@ class VideoFrames:
     def __init__(self) -> None:
         self._open: OrderedDict[Path, Any] = OrderedDict()
         self._pid = os.getpid()
+        _LIVE.add(self)
 
     def _container(self, path: Path, owner: str) -> Any:
         if self._pid != os.getpid():  # forked: the parent's handles stay the parent's, never freed here

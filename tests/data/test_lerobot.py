@@ -429,3 +429,18 @@ def test_summary(v2):
     summary = get_format("lerobot").summary(v2)
     assert summary["format"] == "lerobot" and summary["num_episodes"] == 3 and summary["num_steps"] == 18
     assert summary["obs_shape"] == (SIZE, SIZE, 3) and summary["action_shape"] == (2,)
+
+
+def test_videos_are_closed_before_a_fork(v3):
+    import os
+
+    ds = load_dataset(v3, num_steps=2)
+    first = ds[0]["pixels"]
+    assert ds._videos._open  # a video open in this process
+    pid = os.fork()
+    if pid == 0:  # the child: nothing to do
+        os._exit(0)
+    os.waitpid(pid, 0)
+    assert not ds._videos._open  # closed before the fork (FFmpeg's decoder threads joined)
+    assert torch.equal(ds[0]["pixels"], first)  # and reopened when read
+    ds.close()
