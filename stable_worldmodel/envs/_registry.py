@@ -162,6 +162,24 @@ BUILTIN: tuple[EnvEntry, ...] = (
             ("Quadruped", "quadruped"),
         )
     ),
+    # -- the families of upstream's main (issue 31); each family inserts its block right below this line --
+    # Gymnasium's classic control with factors (no extra: Gymnasium only); Gymnasium's episode limits
+    *(
+        EnvEntry(
+            f"swm/{name}",
+            f"{_P}.classic_control.{module}",
+            ("classic_control", kind),
+            f"{_P}.classic_control.expert:ClassicControlExpert",
+            max_episode_steps=steps,
+        )
+        for name, module, kind, steps in (
+            ("CartPoleControl-v1", "cartpole:CartPoleControlEnv", "discrete", 500),
+            ("MountainCarControl-v0", "mountain_car:MountainCarControlEnv", "discrete", 200),
+            ("MountainCarContinuousControl-v0", "mountain_car:MountainCarContinuousControlEnv", "continuous", 999),
+            ("AcrobotControl-v1", "acrobot:AcrobotControlEnv", "discrete", 500),
+            ("PendulumControl-v1", "pendulum:PendulumControlEnv", "continuous", 200),
+        )
+    ),
 )
 
 
