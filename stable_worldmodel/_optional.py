@@ -21,9 +21,16 @@ EXTRAS = {
     "ray": "ray",
     "minigrid": "minigrid",
     "lance": "lance",
+    # -- the env families of issue 31 insert their modules right below this line --
+    "gymnasium_robotics": "robotics",
 }
 #: env tag -> the modules its extra installs (``swm envs`` marks envs whose extra is missing)
-EXTRA_MODULES = {"mujoco": ("mujoco", "dm_control", "ogbench"), "minigrid": ("minigrid",)}
+EXTRA_MODULES = {
+    "mujoco": ("mujoco", "dm_control", "ogbench"),
+    "minigrid": ("minigrid",),
+    # -- the env families of issue 31 insert their extras right below this line --
+    "robotics": ("gymnasium_robotics", "mujoco"),
+}
 
 
 def missing_extra(tags) -> str | None:

@@ -163,6 +163,21 @@ BUILTIN: tuple[EnvEntry, ...] = (
         )
     ),
     # -- the families of upstream's main (issue 31); each family inserts its block right below this line --
+    # Gymnasium-Robotics Fetch (extra "robotics"): Gymnasium-Robotics' 50 steps; never terminated, as upstream
+    # (success: info["is_success"], eval_state). Slide has no scripted expert (see fetch/expert.py)
+    *(
+        EnvEntry(
+            f"swm/Fetch{task}{variant}-v3",
+            f"{_P}.fetch.env:FetchEnv",
+            ("continuous", "robotics"),
+            None if task == "Slide" else f"{_P}.fetch.expert:FetchExpert",
+            {"env_id": f"Fetch{task}{'Dense' if variant == 'Dense' else ''}-v4"}
+            | ({"flatten": False} if variant == "Dict" else {}),
+            max_episode_steps=50,
+        )
+        for task in ("Reach", "Push", "Slide", "PickAndPlace")
+        for variant in ("", "Dense", "Dict")
+    ),
     # Gymnasium's classic control with factors (no extra: Gymnasium only); Gymnasium's episode limits
     *(
         EnvEntry(

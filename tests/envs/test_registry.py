@@ -13,24 +13,23 @@ from gymnasium.utils.env_checker import check_env
 
 import stable_worldmodel as swm
 from stable_worldmodel import keys
-from stable_worldmodel._optional import is_available
+from stable_worldmodel._optional import missing_extra
 from stable_worldmodel.envs import get_entry, list_envs, register_env
 from stable_worldmodel.envs.base import SupportsDatasetReset, SupportsEvalState, SupportsRenderSize
 from stable_worldmodel.errors import UnknownNameError
 
-MUJOCO = is_available("mujoco") and is_available("dm_control") and is_available("ogbench")
 ENVS = [
-    pytest.param(e, marks=pytest.mark.skipif(not MUJOCO, reason="extra 'mujoco' not installed"))
-    if "mujoco" in get_entry(e).tags
+    pytest.param(e, marks=pytest.mark.skipif(True, reason=f"extra {missing_extra(get_entry(e).tags)!r} not installed"))
+    if missing_extra(get_entry(e).tags)
     else e
     for e in list_envs()
 ]
 
 
 def fast(env_id: str) -> dict:
-    """Constructor kwargs that keep the smoke tests quick: MuJoCo envs render without shadows
+    """Constructor kwargs that keep the smoke tests quick: MuJoCo envs (and Fetch) render without shadows
     (render_quality 'low', ~8x faster on a CPU renderer; the picture is not what these test)."""
-    return {"render_quality": "low"} if "mujoco" in get_entry(env_id).tags else {}
+    return {"render_quality": "low"} if {"mujoco", "robotics"} & set(get_entry(env_id).tags) else {}
 
 
 def test_registry_lists_the_seed_envs():
