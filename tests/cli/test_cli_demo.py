@@ -117,6 +117,7 @@ def test_run_names_are_claimed_once(tmp_path):
 
 def test_a_second_demo_waits_for_the_first_recording(tmp_path):
     import os
+    import select
     import subprocess
     import sys
     import time
@@ -130,14 +131,21 @@ def test_a_second_demo_waits_for_the_first_recording(tmp_path):
     code = "from stable_worldmodel.cli import main; raise SystemExit(main())"
     args = [sys.executable, "-c", code, "demo", *TINY, "--out", str(tmp_path / "d")]
     proc = subprocess.Popen(args, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    seen = []
     try:
-        time.sleep(3)
+        deadline = time.monotonic() + 120  # start-up may take long on a loaded machine
+        while time.monotonic() < deadline and proc.poll() is None:
+            if select.select([proc.stdout], [], [], 1.0)[0]:
+                seen.append(proc.stdout.readline())
+                if "Waiting for another swm demo recording" in seen[-1]:
+                    break
+        time.sleep(0.5)
         assert proc.poll() is None and not (home / f"{DATASET}.h5").exists()  # waiting, nothing written
     finally:
         lock.release()
     out, _ = proc.communicate(timeout=120)
-    assert proc.returncode == 0, out
-    assert "Waiting for another swm demo recording" in out
+    assert proc.returncode == 0, "".join(seen) + out
+    assert "Waiting for another swm demo recording" in "".join(seen)
 
 
 def test_demo_random_and_expert_share_seeds(swm, tmp_path):
