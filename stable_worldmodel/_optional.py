@@ -22,6 +22,7 @@ EXTRAS = {
     "minigrid": "minigrid",
     "lance": "lance",
     # -- the env families of issue 31 insert their modules right below this line --
+    "ale_py": "ale",
     "gymnasium_robotics": "robotics",
 }
 #: env tag -> the modules its extra installs (``swm envs`` marks envs whose extra is missing)
@@ -29,6 +30,7 @@ EXTRA_MODULES = {
     "mujoco": ("mujoco", "dm_control", "ogbench"),
     "minigrid": ("minigrid",),
     # -- the env families of issue 31 insert their extras right below this line --
+    "ale": ("ale_py",),
     "robotics": ("gymnasium_robotics", "mujoco"),
 }
 

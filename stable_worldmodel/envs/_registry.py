@@ -163,6 +163,38 @@ BUILTIN: tuple[EnvEntry, ...] = (
         )
     ),
     # -- the families of upstream's main (issue 31); each family inserts its block right below this line --
+    # upstream's Piecewise: no episode limit of its own, as upstream (swm tools cut at 100 steps)
+    EnvEntry(
+        "swm/Piecewise-v0",
+        f"{_P}.piecewise.piecewise_env:PiecewiseEnv",
+        ("continuous",),
+        f"{_P}.piecewise.expert:PiecewiseExpert",
+    ),
+    # PyFlyt's rocket landing (extra "pyflyt"): the env truncates after max_duration_seconds (30 s: 1200 steps)
+    EnvEntry(
+        "swm/PFRocketLanding-v0",
+        f"{_P}.rocket_landing.pyflyt_rocketlanding:RocketLandingEnv",
+        ("continuous", "pyflyt"),
+        f"{_P}.rocket_landing.expert:RocketLandingExpert",
+        tool_steps=1200,
+    ),
+    # Craftax (extra "craftax"): no scripted expert (an open-ended crafting game); the env truncates at
+    # craftax's time limit, the tools cut at 1000 steps
+    *(
+        EnvEntry(f"swm/{name}-v1", f"{_P}.craftax.craftax:{name}Wrapper", ("discrete", "craftax"), tool_steps=1000)
+        for name in ("CraftaxPixels", "CraftaxSymbolic", "CraftaxClassicPixels", "CraftaxClassicSymbolic")
+    ),
+    # OGBench's locomotion mazes (extra "mujoco"): no TimeLimit of their own, as upstream; the tools cut at
+    # OGBench's 1000 steps (point / ant mazes)
+    EnvEntry(
+        "swm/OGBMaze-v0",
+        f"{_P}.ogbench.maze_env:MazeEnv",
+        ("continuous", "mujoco"),
+        f"{_P}.ogbench.maze_expert:OGBMazeExpert",
+        tool_steps=1000,
+    ),
+    # ALE (extra "ale"): ale-py's own ALE/<Game>-v5 ids (no factors, no goal) are registered with Gymnasium
+    # only, lazily (no ale_py import), by register_all: stable_worldmodel.envs.ale.registration
     # Gymnasium-Robotics Fetch (extra "robotics"): Gymnasium-Robotics' 50 steps; never terminated, as upstream
     # (success: info["is_success"], eval_state). Slide has no scripted expert (see fetch/expert.py)
     *(
@@ -229,6 +261,7 @@ def register_all() -> None:
             max_episode_steps=entry.max_episode_steps,
             tool_steps=entry.tool_steps,
         )
+    importlib.import_module(f"{_P}.ale.registration").register_ale_ids()
 
 
 def make_env(env_id: str, **kwargs: Any) -> Any:
