@@ -10,6 +10,8 @@ $(STAMP): pyproject.toml constraints.txt
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install -q --upgrade pip
 	PIP_CONSTRAINT=$(CURDIR)/constraints.txt $(PY) -m pip install -q -e ".[dev]"
+	# PyFlyt (swm/PFRocketLanding-v0) pins numpy<2 in its metadata but runs on numpy 2: without its pins
+	PIP_CONSTRAINT=$(CURDIR)/constraints.txt $(PY) -m pip install -q --no-deps "PyFlyt>=0.29"
 	touch $(STAMP)
 
 demo: $(STAMP)

@@ -22,16 +22,22 @@ EXTRAS = {
     "minigrid": "minigrid",
     "lance": "lance",
     # -- the env families of issue 31 insert their modules right below this line --
-    "ale_py": "ale",
+    "PyFlyt": "pyflyt",
+    "pybullet": "pyflyt",
+    "craftax": "craftax",
+    "jax": "craftax",
     "gymnasium_robotics": "robotics",
+    "ale_py": "ale",
 }
 #: env tag -> the modules its extra installs (``swm envs`` marks envs whose extra is missing)
 EXTRA_MODULES = {
     "mujoco": ("mujoco", "dm_control", "ogbench"),
     "minigrid": ("minigrid",),
     # -- the env families of issue 31 insert their extras right below this line --
-    "ale": ("ale_py",),
+    "pyflyt": ("PyFlyt", "pybullet"),
+    "craftax": ("craftax", "jax"),
     "robotics": ("gymnasium_robotics", "mujoco"),
+    "ale": ("ale_py",),
 }
 
 

@@ -18,12 +18,20 @@ from stable_worldmodel.envs import get_entry, list_envs, register_env
 from stable_worldmodel.envs.base import SupportsDatasetReset, SupportsEvalState, SupportsRenderSize
 from stable_worldmodel.errors import UnknownNameError
 
-ENVS = [
-    pytest.param(e, marks=pytest.mark.skipif(True, reason=f"extra {missing_extra(get_entry(e).tags)!r} not installed"))
-    if missing_extra(get_entry(e).tags)
-    else e
-    for e in list_envs()
-]
+#: families whose first step compiles for a minute (craftax's JAX games): their smoke tests run with -m slow
+SLOW_TAGS = {"craftax"}
+
+
+def _param(env_id: str):
+    tags = set(get_entry(env_id).tags)
+    if missing_extra(tags):
+        return pytest.param(env_id, marks=pytest.mark.skip(reason=f"extra {missing_extra(tags)!r} not installed"))
+    if tags & SLOW_TAGS:
+        return pytest.param(env_id, marks=pytest.mark.slow)
+    return env_id
+
+
+ENVS = [_param(e) for e in list_envs()]
 
 
 def fast(env_id: str) -> dict:
