@@ -76,7 +76,7 @@ def _headless_linux() -> bool:
     return sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
 
 
-def setup_gl() -> str | None:
+def setup_gl(extra: str = "mujoco", what: str = "the MuJoCo environments") -> str | None:
     """Choose the GL backend before ``mujoco`` is imported; returns ``MUJOCO_GL``.
 
     On Linux without ``DISPLAY`` / ``WAYLAND_DISPLAY``, an unset ``MUJOCO_GL`` becomes ``"egl"``
@@ -86,16 +86,17 @@ def setup_gl() -> str | None:
     has picked GLFW, which cannot render without a display: its renderer is pointed at EGL
     (ConfigError saying how to fix it where EGL cannot load).
     Raises :class:`~stable_worldmodel.errors.DependencyNotInstalled` (with the pip command) when
-    the ``mujoco`` extra (mujoco, dm_control, ogbench) is not installed.
+    the modules of ``extra`` (default ``mujoco``: mujoco, dm_control, ogbench) are not installed;
+    ``what`` names the envs that need them.
     """
     from .._optional import EXTRA_MODULES, is_available
     from ..errors import DependencyNotInstalled
 
-    missing = [m for m in EXTRA_MODULES["mujoco"] if not is_available(m)]
+    missing = [m for m in EXTRA_MODULES[extra] if not is_available(m)]
     if missing:
         raise DependencyNotInstalled(
-            f"the MuJoCo environments require {', '.join(missing)}, which is not installed. "
-            f'Install it with: pip install "stable-worldmodel[mujoco]"'
+            f"{what} require {', '.join(missing)}, which is not installed. "
+            f'Install it with: pip install "stable-worldmodel[{extra}]"'
         )
     backend = default_gl_backend()
     if backend is None and _headless_linux():
@@ -210,6 +211,20 @@ class MjRenderer:
         if not _AT_EXIT:
             atexit.register(_close_live_renderers)
             _AT_EXIT.append(True)
+
+    def upload_texture(self, model, texture: int) -> bool:
+        """Send ``model``'s texture ``texture`` (changed in place, e.g. a colour factor) to this renderer's
+        GL context; False when it has no context to send it to (closed: a new one reads the model)."""
+        import mujoco
+
+        inner = self._renderer  # mujoco.Renderer: its GL and MuJoCo contexts
+        gl, con = getattr(inner, "_gl_context", None), getattr(inner, "_mjr_context", None)
+        if con is None:
+            return False
+        if gl is not None:
+            gl.make_current()
+        mujoco.mjr_uploadTexture(model, con, texture)
+        return True
 
     def render(self, data, camera: int | str = -1, scene_option=None) -> np.ndarray:
         """The frame of ``data`` seen from ``camera`` (id, name, or -1 for the free camera)."""

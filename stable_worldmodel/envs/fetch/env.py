@@ -81,47 +81,22 @@ drawn at the requested size (upstream draws 480 x 480 and resizes with OpenCV).
 
 from __future__ import annotations
 
-import os
 import re
 import threading
 import weakref
 from collections.abc import Mapping
 from typing import Any
 
-from ..._optional import is_available
-from ...errors import ConfigError, DependencyNotInstalled
-
-ROBOTICS_MODULES = ("gymnasium_robotics", "mujoco")
+from ...errors import ConfigError
 
 
 def setup_robotics() -> str | None:
     """Check the ``robotics`` extra and choose the GL backend before ``mujoco`` is imported
-    (as :func:`~stable_worldmodel.envs.mujoco_render.setup_gl`, without its ``mujoco`` extra check:
-    these envs need neither dm_control nor ogbench)."""
-    missing = [m for m in ROBOTICS_MODULES if not is_available(m)]
-    if missing:
-        raise DependencyNotInstalled(
-            f"the Fetch environments require {', '.join(missing)}, which is not installed. "
-            f'Install it with: pip install "stable-worldmodel[robotics]"'
-        )
-    from .. import mujoco_render
+    (:func:`~stable_worldmodel.envs.mujoco_render.setup_gl` for this extra: these envs need neither
+    dm_control nor ogbench)."""
+    from ..mujoco_render import setup_gl
 
-    backend = mujoco_render.default_gl_backend()
-    if backend is None and mujoco_render._headless_linux():
-        if not mujoco_render._adopt_egl():
-            raise ConfigError(
-                "mujoco was imported before MUJOCO_GL was set, so it picked GLFW, which cannot render without a "
-                "display, and EGL could not be loaded instead; set MUJOCO_GL=egl in the environment"
-            )
-        backend = "egl"
-    if backend in ("egl", "osmesa"):
-        platform = os.environ.setdefault("PYOPENGL_PLATFORM", backend)
-        if platform != backend:
-            raise ConfigError(
-                f"MUJOCO_GL={backend!r} requires PYOPENGL_PLATFORM unset or {backend!r}, got {platform!r}; "
-                f"unset PYOPENGL_PLATFORM or set both to the same backend"
-            )
-    return backend
+    return setup_gl("robotics", "the Fetch environments")
 
 
 setup_robotics()
@@ -614,13 +589,6 @@ class SharedRenderer(MjRenderer):
         """The frame of ``data`` with ``model``'s scene (a copy of the model this renderer was made from)."""
         self._model = model
         return self.render(data, camera)
-
-    def upload_texture(self, model, texture: int) -> None:
-        """Send ``model``'s texture ``texture`` to this renderer's GL context."""
-        inner = self._renderer  # mujoco.Renderer: its GL and MuJoCo contexts
-        if inner._gl_context is not None:
-            inner._gl_context.make_current()
-        mujoco.mjr_uploadTexture(model, inner._mjr_context, texture)
 
 
 class _Shared:

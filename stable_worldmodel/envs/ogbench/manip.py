@@ -570,16 +570,8 @@ class ManipMixin(DatasetResetMixin):
 
     def _upload_texture(self, texture: int) -> None:
         """Send a changed texture to the live GL context (a new context reads the model anyway)."""
-        if self._mjr is None:
-            return
-        inner = getattr(self._mjr, "_renderer", None)  # mujoco.Renderer: its GL and MuJoCo contexts
-        gl, con = getattr(inner, "_gl_context", None), getattr(inner, "_mjr_context", None)
-        if con is None:
+        if self._mjr is not None and not self._mjr.upload_texture(self._model, texture):
             self._close_renderer()
-            return
-        if gl is not None:
-            gl.make_current()
-        mujoco.mjr_uploadTexture(self._model, con, texture)
 
     def _close_renderer(self) -> None:
         r, self._mjr = getattr(self, "_mjr", None), None
