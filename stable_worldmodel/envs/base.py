@@ -114,6 +114,24 @@ def check_variation_option(options: Mapping[str, Any] | None, names: list[str] |
     return requested
 
 
+def checked_reset_options(owner: str, options: Any, names: list[str]) -> dict[str, Any]:
+    """A copy of reset ``options`` (``{}`` for None) once checked: a dict, its ``"variation"`` names and
+    its ``"variation_values"`` keys factors among ``names`` (``owner`` and "did you mean" in the errors)."""
+    if options is None:
+        return {}
+    if not isinstance(options, Mapping):
+        raise ConfigError(f"{owner}.reset requires options as a dict, got {options!r}")
+    check_variation_option(options, names)
+    values = options.get(keys.VARIATION_VALUES)
+    if values is not None:
+        if not isinstance(values, Mapping):
+            raise ConfigError(f"{owner}.reset requires options[{keys.VARIATION_VALUES!r}] as a dict, got {values!r}")
+        for name in flatten_values(values):
+            if name not in names:
+                raise unknown_name("variation factor", name, names)
+    return dict(options)
+
+
 def apply_variation_options(variation_space, options: Mapping[str, Any] | None, np_random: np.random.Generator):
     """Reset ``variation_space`` to its defaults, then resample / set what ``options`` names.
 

@@ -107,7 +107,7 @@ import numpy as np  # noqa: E402
 
 from ... import keys, spaces  # noqa: E402
 from ...errors import unknown_name  # noqa: E402
-from ..base import DatasetResetMixin, check_render_size, check_variation_option, flatten_values  # noqa: E402
+from ..base import DatasetResetMixin, check_render_size, checked_reset_options, flatten_values  # noqa: E402
 from ..mujoco_render import MjRenderer, check_render_quality  # noqa: E402
 from . import _sim  # noqa: E402
 from ._sim import CAMERA, DISTANCE_THRESHOLD, TASKS, FetchSim, euler2quat  # noqa: E402
@@ -374,20 +374,7 @@ class FetchEnv(DatasetResetMixin, gym.Env):
         owner = type(self).__name__
         if options is None:
             return {}
-        if not isinstance(options, Mapping):
-            raise ConfigError(f"{owner}.reset requires options as a dict, got {options!r}")
-        names = self.variation_space.names()
-        check_variation_option(options, names)
-        values = options.get(keys.VARIATION_VALUES)
-        if values is not None:
-            if not isinstance(values, Mapping):
-                raise ConfigError(
-                    f"{owner}.reset requires options[{keys.VARIATION_VALUES!r}] as a dict, got {values!r}"
-                )
-            for name in flatten_values(values):
-                if name not in names:
-                    raise unknown_name("variation factor", name, names)
-        out = dict(options)
+        out = checked_reset_options(owner, options, self.variation_space.names())
         if out.get(keys.STATE) is not None:
             out[keys.STATE] = self._as_state(f"reset option {keys.STATE!r}", out[keys.STATE])
         return out

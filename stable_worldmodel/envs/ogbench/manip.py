@@ -48,8 +48,8 @@ import numpy as np
 
 from ... import keys, spaces
 from ..._optional import require
-from ...errors import ConfigError, did_you_mean, unknown_name
-from ..base import DatasetResetMixin, check_render_size, check_variation_option, flatten_values
+from ...errors import ConfigError, did_you_mean
+from ..base import DatasetResetMixin, check_render_size, checked_reset_options
 from ..mujoco_render import MjRenderer, check_render_quality, setup_gl
 from . import infokeys, meshes
 from .factors import RENDER_CAMERA, CubeSizes, VisualFactors, tint
@@ -239,20 +239,7 @@ class ManipMixin(DatasetResetMixin):
         owner = type(self).__name__
         if options is None:
             return {}
-        if not isinstance(options, Mapping):
-            raise ConfigError(f"{owner}.reset requires options as a dict, got {options!r}")
-        names = self.variation_space.names()
-        check_variation_option(options, names)
-        values = options.get(keys.VARIATION_VALUES)
-        if values is not None:
-            if not isinstance(values, Mapping):
-                raise ConfigError(
-                    f"{owner}.reset requires options[{keys.VARIATION_VALUES!r}] as a dict, got {values!r}"
-                )
-            for name in flatten_values(values):
-                if name not in names:
-                    raise unknown_name("variation factor", name, names)
-        out = dict(options)
+        out = checked_reset_options(owner, options, self.variation_space.names())
         if self._mode == DATA_COLLECTION and out.get(keys.GOAL_STATE) is not None:
             raise ConfigError(
                 f"{owner}.reset takes no {keys.GOAL_STATE!r} option in mode 'data_collection' "

@@ -80,7 +80,7 @@ import numpy as np
 from ... import keys, spaces
 from ..._optional import require
 from ...errors import ConfigError, check_int, did_you_mean, unknown_name
-from ..base import DatasetResetMixin, check_render_size, check_variation_option, flatten_values
+from ..base import DatasetResetMixin, check_render_size, checked_reset_options
 from ..mujoco_render import MjRenderer, check_render_quality, setup_gl
 from .factors import box
 from .maze_layout import (
@@ -392,20 +392,7 @@ class MazeEnv(DatasetResetMixin, gym.Env):
         owner = type(self).__name__
         if options is None:
             return {}
-        if not isinstance(options, Mapping):
-            raise ConfigError(f"{owner}.reset requires options as a dict, got {options!r}")
-        names = self.variation_space.names()
-        check_variation_option(options, names)
-        values = options.get(keys.VARIATION_VALUES)
-        if values is not None:
-            if not isinstance(values, Mapping):
-                raise ConfigError(
-                    f"{owner}.reset requires options[{keys.VARIATION_VALUES!r}] as a dict, got {values!r}"
-                )
-            for name in flatten_values(values):
-                if name not in names:
-                    raise unknown_name("variation factor", name, names)
-        out = dict(options)
+        out = checked_reset_options(owner, options, self.variation_space.names())
         for key in (keys.STATE, keys.GOAL_STATE):
             if out.get(key) is not None:
                 out[key] = self._check_state(f"reset option {key!r}", out[key])
