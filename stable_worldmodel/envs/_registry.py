@@ -313,6 +313,15 @@ def make_env(env_id: str, **kwargs: Any) -> Any:
         return gym.make(env_id, **kwargs)
 
 
+#: (tag, label) of the families an unknown-id message shows as one entry (``swm envs`` lists them)
+_GROUPED = (
+    ("classic_control", "swm/<Name>Control-v*"),
+    ("dmcontrol", "swm/<Name>DMControl-v0"),
+    ("robotics", "swm/Fetch<Task>[Dense|Dict]-v3"),
+    ("craftax", "swm/Craftax[Classic]<Pixels|Symbolic>-v1"),
+)
+
+
 def list_envs(tag: str | None = None) -> list[str]:
     """Registered ``swm/...`` ids, optionally only those carrying ``tag``."""
     return sorted(e.env_id for e in _ENTRIES.values() if tag is None or tag in e.tags)
@@ -330,13 +339,16 @@ def get_entry(env_id: str) -> EnvEntry:
         return EnvEntry(env_id, ep, (), None, dict(spec.kwargs), spec.max_episode_steps)
     ours = sorted(_ENTRIES)
     hint = did_you_mean(env_id, ours) or did_you_mean(env_id, [k for k in gym.registry if k not in _ENTRIES])
-    dmc = [e for e in ours if "dmcontrol" in _ENTRIES[e].tags]
-    shown = [e for e in ours if e not in dmc] + (
-        [f"swm/<Name>DMControl-v0 ({len(dmc)} domains, see `swm envs`)"] if dmc else []
-    )
+    shown, grouped = [], set()
+    for tag, label in _GROUPED:  # families of many ids: one line each
+        members = [e for e in ours if tag in _ENTRIES[e].tags]
+        if members:
+            shown.append(f"{label} ({len(members)})")
+            grouped.update(members)
+    shown = [e for e in ours if e not in grouped] + shown
     raise UnknownNameError(
         f"Unknown environment id {env_id!r}.{hint} Our worlds: {', '.join(shown)} "
-        "(any registered Gymnasium id works too)"
+        "(`swm envs` lists them all; any registered Gymnasium id works too)"
     )
 
 
