@@ -3,8 +3,9 @@
 Per page, in order, in a fresh working folder and cache (``STABLEWM_HOME``):
 
 - ```python blocks share one namespace; ``print(...)  # -> TEXT`` must print exactly ``TEXT``.
-- ```bash blocks run command by command (``\\`` continues a line, ``#`` starts a comment) through ``bash``, each one
-  with exit status 0; counts are made small first (:data:`SMALL`: ``--episodes 50`` runs 2 episodes, ...).
+- ```bash blocks run command by command (``\\`` continues a line, ``#`` starts a comment), each one with exit
+  status 0 (``swm ...`` in this process, through :func:`stable_worldmodel.cli.main`; anything else through
+  ``bash``); counts are made small first (:data:`SMALL`: ``--episodes 50`` runs 2 episodes, ...).
 - a block right after ``<!-- docs-test: skip REASON -->`` is not run (a GPU, a cluster, the network);
   ```text / ```console / ```yaml blocks are shown, not run (a ```yaml block after ``<!-- docs-test: file NAME -->``
   is written to NAME for the blocks below it).
@@ -14,12 +15,15 @@ from __future__ import annotations
 
 import os
 import re
+import shlex
 import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
+
+from stable_worldmodel.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
@@ -104,6 +108,18 @@ def small_file(text: str) -> str:
     return text
 
 
+def _swm_command(command: str) -> tuple[dict[str, str], list[str]] | None:
+    """``({VAR: value}, argv)`` of ``[VAR=value ...] swm ARGS`` (run in this process), else None (a shell command)."""
+    if any(c in command for c in "|;&<>$`"):
+        return None
+    parts = shlex.split(command)
+    assignments = {}
+    while parts and re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*=.*", parts[0]):
+        key, _, value = parts.pop(0).partition("=")
+        assignments[key] = value
+    return (assignments, parts[1:]) if parts and parts[0] == "swm" else None
+
+
 def _page_id(page: Path) -> str:
     return page.relative_to(ROOT).as_posix()
 
@@ -161,6 +177,15 @@ def test_page_examples_run(page, tmp_path, monkeypatch):
         elif lang == "bash":
             for command in commands(body):
                 command = small(command)
+                swm_args = _swm_command(command)
+                if swm_args is not None:  # in this process: no interpreter start-up per command
+                    assignments, argv = swm_args
+                    with monkeypatch.context() as m:
+                        for key, value in assignments.items():
+                            m.setenv(key, value)
+                        code = main(argv)
+                    assert code == 0, f"{_page_id(page)}: `{command}` exited {code} (its output is above)"
+                    continue
                 done = subprocess.run(
                     ["bash", "-c", command],
                     cwd=work,
