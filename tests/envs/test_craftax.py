@@ -37,6 +37,7 @@ def test_missing_extra_names_it_and_the_package_imports_light():
         "import sys; sys.modules['craftax'] = None\n"
         "import gymnasium as gym, stable_worldmodel, stable_worldmodel.envs.craftax as c\n"
         "print('jax' in sys.modules)\n"
+        "sys.modules['jax'] = None  # the env module imports jax first: the error without its seconds of import\n"
         "from stable_worldmodel.errors import DependencyNotInstalled\n"
         "try:\n"
         "    gym.make('swm/CraftaxClassicSymbolic-v1')\n"

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 
@@ -22,16 +23,22 @@ from stable_worldmodel.errors import UnknownNameError
 SLOW_TAGS = {"craftax"}
 
 
-def _param(env_id: str):
+#: ids that are another reward or observation layout of the same simulation: one World test of the family runs
+#: by default (each still gets its smoke test); the rest with -m slow
+SAME_SIMULATION = re.compile(r"swm/Fetch\w+(Dense|Dict)-v3")
+
+
+def _param(env_id: str, world: bool = False):
     tags = set(get_entry(env_id).tags)
     if missing_extra(tags):
         return pytest.param(env_id, marks=pytest.mark.skip(reason=f"extra {missing_extra(tags)!r} not installed"))
-    if tags & SLOW_TAGS:
+    if tags & SLOW_TAGS or (world and SAME_SIMULATION.fullmatch(env_id)):
         return pytest.param(env_id, marks=pytest.mark.slow)
     return env_id
 
 
 ENVS = [_param(e) for e in list_envs()]
+WORLD_ENVS = [_param(e, world=True) for e in list_envs()]
 
 
 def fast(env_id: str) -> dict:
@@ -107,7 +114,7 @@ def test_env_smoke(env_id):
 
 
 @pytest.mark.parametrize("num_envs", [1, 8])
-@pytest.mark.parametrize("env_id", ENVS)
+@pytest.mark.parametrize("env_id", WORLD_ENVS)
 def test_env_in_world_with_its_expert(env_id, num_envs):
     world = swm.World(
         env_id, num_envs=num_envs, image_shape=(16, 16), verbose=0, vectorization_mode="sync", **fast(env_id)
