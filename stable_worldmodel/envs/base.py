@@ -114,6 +114,26 @@ def check_variation_option(options: Mapping[str, Any] | None, names: list[str] |
     return requested
 
 
+def rgb_factor(color) -> Any:
+    """An RGB colour factor (``spaces.RGBBox``) whose default is ``color``."""
+    from .. import spaces
+
+    return spaces.RGBBox(init_value=np.array(color, np.uint8))
+
+
+def scalar_factor(low: float, high: float, init: float) -> Any:
+    """A one-number float32 factor in ``[low, high]`` (a ``(1,)`` ``spaces.Box``) whose default is ``init``."""
+    from .. import spaces
+
+    return spaces.Box(
+        np.array([low], np.float32),
+        np.array([high], np.float32),
+        shape=(1,),
+        dtype=np.float32,
+        init_value=np.array([init], np.float32),
+    )
+
+
 def checked_reset_options(owner: str, options: Any, names: list[str]) -> dict[str, Any]:
     """A copy of reset ``options`` (``{}`` for None) once checked: a dict, its ``"variation"`` names and
     its ``"variation_values"`` keys factors among ``names`` (``owner`` and "did you mean" in the errors)."""

@@ -53,6 +53,8 @@ import numpy as np
 from ... import keys, spaces
 from ...errors import ConfigError
 from ..base import DatasetResetMixin, check_render_size, point_option
+from ..base import rgb_factor as _rgb
+from ..base import scalar_factor as _box1
 
 __all__ = ["DEFAULT_VARIATIONS", "PiecewiseEnv", "zone_index"]
 
@@ -75,20 +77,6 @@ def zone_index(pos: np.ndarray, grid_n: int) -> np.ndarray:
     play = float(IMG_SIZE - 2 * BORDER_SIZE)
     cr = np.clip(np.trunc((pos - BORDER_SIZE) / play * grid_n), 0, grid_n - 1).astype(np.int64)
     return cr[..., 1] * grid_n + cr[..., 0]
-
-
-def _rgb(c) -> spaces.RGBBox:
-    return spaces.RGBBox(init_value=np.array(c, np.uint8))
-
-
-def _box1(low: float, high: float, init: float) -> spaces.Box:
-    return spaces.Box(
-        np.array([low], np.float32),
-        np.array([high], np.float32),
-        shape=(1,),
-        dtype=np.float32,
-        init_value=np.array([init], np.float32),
-    )
 
 
 def _position(init) -> spaces.Box:

@@ -33,6 +33,7 @@ from __future__ import annotations
 import numpy as np
 
 from ... import spaces
+from ..base import rgb_factor as _rgb
 from .physics import WALLS
 from .shapes import SHAPES, ShapeSpec, distance_to_shape, rotation, to_world
 
@@ -48,10 +49,6 @@ def _scalar(low: float, high: float, init: float) -> spaces.Box:
 
 def _xy(low: float, high: float, init) -> spaces.Box:
     return spaces.Box(low, high, shape=(2,), dtype=np.float64, init_value=np.asarray(init, np.float64))
-
-
-def _rgb(rgb) -> spaces.RGBBox:
-    return spaces.RGBBox(init_value=np.asarray(rgb, np.uint8))
 
 
 def build_variation_space() -> spaces.Dict:

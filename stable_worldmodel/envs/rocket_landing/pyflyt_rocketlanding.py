@@ -68,6 +68,7 @@ from ... import keys, spaces
 from ..._optional import require
 from ...errors import ConfigError
 from ..base import DatasetResetMixin, apply_variation_options, check_render_size
+from ..base import rgb_factor as _rgb
 
 __all__ = ["REST_HEIGHT", "RocketLandingEnv"]
 
@@ -142,10 +143,6 @@ CAMERA_FOV = 90.0
 # landing and crash thresholds (upstream's)
 LAND_SPEED, LAND_SPIN, LAND_TILT, LAND_LATERAL = 2.0, 5.0, 0.5, 5.0
 CRASH_SPEED, CRASH_SPIN = 5.0, 10.0
-
-
-def _rgb(c) -> spaces.RGBBox:
-    return spaces.RGBBox(init_value=np.array(c, np.uint8))
 
 
 def _box(low, high, init) -> spaces.Box:

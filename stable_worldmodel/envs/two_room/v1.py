@@ -50,6 +50,8 @@ import numpy as np
 from ... import keys, spaces
 from ...errors import ConfigError
 from ..base import DatasetResetMixin, check_render_size, point_option
+from ..base import rgb_factor as _rgb
+from ..base import scalar_factor as _box1
 
 DEFAULT_VARIATIONS = ("agent.position", "target.position")
 IMG_SIZE = 224
@@ -65,20 +67,6 @@ LAYOUT = "_layout"  # private: wall axis, wall position, agent radius, speed, do
 #: a dot weight below this leaves a uint8 pixel as it is (1 - a rounds to 1 in float32): the
 #: dot is computed only where it is larger (within ~5.9 std of the centre)
 _DOT_CUTOFF_STD = 6.0
-
-
-def _rgb(c) -> spaces.RGBBox:
-    return spaces.RGBBox(init_value=np.array(c, np.uint8))
-
-
-def _box1(low: float, high: float, init: float) -> spaces.Box:
-    return spaces.Box(
-        np.array([low], np.float32),
-        np.array([high], np.float32),
-        shape=(1,),
-        dtype=np.float32,
-        init_value=np.array([init], np.float32),
-    )
 
 
 class TwoRoomV1Env(DatasetResetMixin, gym.Env):
