@@ -3,7 +3,8 @@
 Usage: python bench/bench_families.py [--envs ID ...] [--steps 100] [--sizes 64] [--num-envs 1 4]
 
 For each env: our World (random policy, pixels at SIZE x SIZE, 1 and 4 envs) and, where the family wraps a
-third-party env, that env alone (``gym.make(raw)``: ``step()`` + ``render()`` at its own size, one env) as the
+third-party env, that env alone (``gym.make(raw)``: ``step()`` + ``render()`` at its own size, or at the first
+SIZE where it takes one (OGBench), one env) as the
 reference upstream's main builds on: upstream's main is not on PyPI, so the simulator is the original that installs
 here. An env whose extra is missing prints ``n/a``. Prints figures; never asserts on time.
 """
@@ -20,16 +21,21 @@ import stable_worldmodel as swm
 from stable_worldmodel.envs import list_envs
 from stable_worldmodel.policy import RandomPolicy
 
-#: our id -> (the third-party id it wraps, the module that registers that id)
+#: our id -> (the third-party id it wraps or reimplements, the module that registers that id)
 RAW = {
     "swm/CartPoleControl-v1": ("CartPole-v1", None),
     "swm/MountainCarControl-v0": ("MountainCar-v0", None),
     "swm/MountainCarContinuousControl-v0": ("MountainCarContinuous-v0", None),
     "swm/AcrobotControl-v1": ("Acrobot-v1", None),
     "swm/PendulumControl-v1": ("Pendulum-v1", None),
+    "swm/OGBMaze-v0": ("pointmaze-medium-v0", "ogbench"),
+    "swm/FetchReach-v3": ("FetchReach-v4", "gymnasium_robotics"),
+    "swm/FetchPush-v3": ("FetchPush-v4", "gymnasium_robotics"),
     "ALE/Pong-v5": ("ALE/Pong-v5", "ale_py"),
     "swm/PFRocketLanding-v0": ("PyFlyt/Rocket-Landing-v4", "PyFlyt.gym_envs"),
 }
+#: simulators that take the frame size: rendered at the World's size, so both sides draw the same pixels
+SIZED = {"ogbench"}
 #: the ids measured by default: one or two per family
 DEFAULT = [
     "swm/CartPoleControl-v1",
@@ -61,13 +67,14 @@ def world_steps_per_s(env_id: str, n: int, size: int, steps: int) -> float:
         world.close()
 
 
-def raw_steps_per_s(env_id: str, module: str | None, steps: int) -> float:
+def raw_steps_per_s(env_id: str, module: str | None, steps: int, size: int) -> float:
     if module is not None:
         import importlib
 
         registered = importlib.import_module(module)
         gym.register_envs(registered)
-    env = gym.make(env_id, render_mode="rgb_array")
+    kwargs = {"width": size, "height": size} if module in SIZED else {}
+    env = gym.make(env_id, render_mode="rgb_array", **kwargs)
     try:
         env.reset(seed=0)
         env.action_space.seed(0)
@@ -107,7 +114,7 @@ def main() -> None:
     for env_id in envs:
         cells = [_cell(world_steps_per_s, env_id, n, s, args.steps) for s in args.sizes for n in args.num_envs]
         raw = RAW.get(env_id)
-        reference = f"{_cell(raw_steps_per_s, raw[0], raw[1], args.steps)} ({raw[0]})" if raw else "-"
+        reference = f"{_cell(raw_steps_per_s, raw[0], raw[1], args.steps, args.sizes[0])} ({raw[0]})" if raw else "-"
         print(f"| `{env_id}` | " + " | ".join(cells) + f" | {reference} |")
     print(f"\n(env steps/s, random policy, {args.steps} World steps after 3 warm-up steps; numpy {np.__version__})")
 

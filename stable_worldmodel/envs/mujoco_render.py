@@ -127,6 +127,12 @@ def check_render_quality(owner: str, quality: Any) -> str:
 
 
 _LIVE: weakref.WeakSet = weakref.WeakSet()
+_GL_STARTED: list[bool] = []
+
+
+def gl_started() -> bool:
+    """Whether this process has made a GL context to render MuJoCo (then env workers are not forked)."""
+    return bool(_GL_STARTED)
 _AT_EXIT: list[bool] = []
 
 
@@ -208,6 +214,7 @@ class MjRenderer:
         self._camera = mujoco.MjvCamera()
         self._camera_ids: dict[str, int] = {}
         _LIVE.add(self)
+        _GL_STARTED[:] = [True]
         if not _AT_EXIT:
             atexit.register(_close_live_renderers)
             _AT_EXIT.append(True)
@@ -309,3 +316,20 @@ class MjRenderer:
             self.close()
         except Exception:  # interpreter shutdown: the GL library may already be gone
             pass
+
+
+class OwnsRenderer:
+    """Mixin of an env that draws through one lazily made :class:`MjRenderer` kept in ``self._mjr``
+    (made at the first render, dropped when the frame size changes or the env closes)."""
+
+    _mjr: MjRenderer | None = None
+
+    def _upload_texture(self, texture: int) -> None:
+        """Send a changed texture of ``self._model`` to the live GL context (a new context reads the model anyway)."""
+        if self._mjr is not None and not self._mjr.upload_texture(self._model, texture):
+            self._close_renderer()
+
+    def _close_renderer(self) -> None:
+        r, self._mjr = self._mjr, None
+        if r is not None:
+            r.close()

@@ -25,7 +25,8 @@ parent removes whatever still carries the pool's name prefix when it closes the 
 which lists them in /dev/shm; this covers a worker killed by SIGKILL). A block can only outlive
 us if a worker and its parent are both killed by SIGKILL while that block is written but unread.
 
-Start methods: ``fork`` on Linux while torch is not imported (fast; nothing is imported again,
+Start methods: ``fork`` on Linux while :func:`fork_is_safe` (no torch or jax imported, no GL
+context made by :class:`~stable_worldmodel.envs.mujoco_render.MjRenderer`; fast: nothing is imported again,
 so a script without an ``if __name__ == "__main__":`` guard works), else ``forkserver``
 (``spawn`` on Windows). Those two import the main script again in the children, so an unguarded
 script would run once more per child: :func:`check_main_guard` refuses to start workers from
@@ -82,10 +83,23 @@ def _parent_only(conn: Connection) -> Connection:
 def get_context(start_method: str | None = None) -> mp.context.BaseContext:
     if start_method is not None:
         return mp.get_context(start_method)
-    # fork is fast and safe while no threaded runtime (torch) is loaded in the parent
-    if sys.platform.startswith("linux") and "torch" not in sys.modules:
+    if sys.platform.startswith("linux") and fork_is_safe():
         return mp.get_context("fork")
     return mp.get_context("forkserver" if sys.platform != "win32" else "spawn")
+
+
+#: runtimes that start native threads: a forked child inherits their locks but not their threads
+THREADED_RUNTIMES = ("torch", "jax")
+
+
+def fork_is_safe() -> bool:
+    """Whether a forked child can use what this process has started: not after a threaded runtime
+    is imported, nor after a GL context drew a frame (Mesa's software rasterizer threads do not
+    survive a fork, so a child that renders would wait for them for ever)."""
+    if any(name in sys.modules for name in THREADED_RUNTIMES):
+        return False
+    render = sys.modules.get("stable_worldmodel.envs.mujoco_render")
+    return render is None or not render.gl_started()
 
 
 def guard_hint(method: str) -> str:

@@ -347,3 +347,52 @@ def test_start_method_is_validated():
 
     with pytest.raises(ConfigError, match="start_method"):
         VecEnv(lambda: None, 2, mode="async", start_method="thread")
+
+
+def test_fork_is_not_chosen_after_torch_jax_or_a_gl_context(monkeypatch):
+    from stable_worldmodel.envs import mujoco_render
+    from stable_worldmodel.world import _workers
+
+    clean = {k: v for k, v in sys.modules.items() if k not in _workers.THREADED_RUNTIMES}
+    monkeypatch.setattr(sys, "modules", clean)
+    monkeypatch.setattr(mujoco_render, "_GL_STARTED", [])
+    assert _workers.fork_is_safe()
+    monkeypatch.setitem(sys.modules, "jax", object())
+    assert not _workers.fork_is_safe()
+    del sys.modules["jax"]
+    monkeypatch.setattr(mujoco_render, "_GL_STARTED", [True])
+    assert not _workers.fork_is_safe()
+    assert _workers.get_context().get_start_method() != "fork"
+
+
+RENDERED_FIRST = """
+import sys
+import stable_worldmodel as swm
+from stable_worldmodel.policy import RandomPolicy
+
+def main():
+    for n in (1, 2):  # the first World renders in this process, the second starts workers
+        world = swm.World("swm/OGBMaze-v0", num_envs=n, image_shape=(16, 16), verbose=0, render_quality="low")
+        world.set_policy(RandomPolicy(seed=0))
+        world.reset(seed=0)
+        world.step()
+        print(n, world.infos["pixels"].shape, flush=True)
+        world.close()
+    print("torch" in sys.modules, flush=True)
+
+if __name__ == "__main__":
+    main()
+"""
+
+
+def test_workers_started_after_a_gl_context_render_instead_of_hanging(tmp_path):
+    # a forked child inherits the GL driver's locks but not its threads: it waited for ever
+    pytest.importorskip("ogbench")
+    proc = run_script(tmp_path, RENDERED_FIRST)
+    try:
+        out, err = proc.communicate(timeout=120)
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL) if proc.poll() is None else None
+    assert proc.returncode == 0, err
+    lines = out.splitlines()
+    assert lines[0].startswith("1 ") and lines[1].startswith("2 ") and lines[2] == "False"

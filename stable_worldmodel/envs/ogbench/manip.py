@@ -50,7 +50,7 @@ from ... import keys, spaces
 from ..._optional import require
 from ...errors import ConfigError, did_you_mean
 from ..base import DatasetResetMixin, check_render_size, checked_reset_options
-from ..mujoco_render import MjRenderer, check_render_quality, setup_gl
+from ..mujoco_render import MjRenderer, OwnsRenderer, check_render_quality, setup_gl
 from . import infokeys, meshes
 from .factors import RENDER_CAMERA, CubeSizes, VisualFactors, tint
 
@@ -94,7 +94,7 @@ def yaw_quat(yaw: float) -> np.ndarray:
     return np.asarray(lie.SO3.from_z_radians(float(yaw)).wxyz, np.float64)
 
 
-class ManipMixin(DatasetResetMixin):
+class ManipMixin(OwnsRenderer, DatasetResetMixin):
     """Reset flow, compilation cache, rendering, goal capture and infos (module docstring)."""
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 20}
@@ -554,16 +554,6 @@ class ManipMixin(DatasetResetMixin):
         if not self._multiview:
             return self.render()
         return {name: self.render(name) for name in self.cameras}
-
-    def _upload_texture(self, texture: int) -> None:
-        """Send a changed texture to the live GL context (a new context reads the model anyway)."""
-        if self._mjr is not None and not self._mjr.upload_texture(self._model, texture):
-            self._close_renderer()
-
-    def _close_renderer(self) -> None:
-        r, self._mjr = getattr(self, "_mjr", None), None
-        if r is not None:
-            r.close()
 
     def close(self) -> None:
         """Free the GL renderer (the env can be reset and rendered again afterwards)."""

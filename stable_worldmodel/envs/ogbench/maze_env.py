@@ -81,7 +81,7 @@ from ... import keys, spaces
 from ..._optional import require
 from ...errors import ConfigError, check_int, did_you_mean, unknown_name
 from ..base import DatasetResetMixin, check_render_size, checked_reset_options
-from ..mujoco_render import MjRenderer, check_render_quality, setup_gl
+from ..mujoco_render import MjRenderer, OwnsRenderer, check_render_quality, setup_gl
 from .factors import box
 from .maze_layout import (
     BALL_TASKS,
@@ -133,7 +133,7 @@ def _texel(color) -> np.ndarray:
     return (255.0 * np.asarray(color, np.float64)).astype(np.uint8)
 
 
-class MazeEnv(DatasetResetMixin, gym.Env):
+class MazeEnv(OwnsRenderer, DatasetResetMixin, gym.Env):
     """OGBench's locomotion mazes with factors of variation (see the module docstring)."""
 
     metadata = {"render_modes": ["rgb_array"], "render_fps": 10}
@@ -606,16 +606,6 @@ class MazeEnv(DatasetResetMixin, gym.Env):
                 self._model, self._render_height, self._render_width, self.render_quality, shadowless=floor
             )
         return self._mjr.render(self._data, self._camera)
-
-    def _upload_texture(self, texture: int) -> None:
-        """Send a changed texture to the live GL context (a new context reads the model anyway)."""
-        if self._mjr is not None and not self._mjr.upload_texture(self._model, texture):
-            self._close_renderer()
-
-    def _close_renderer(self) -> None:
-        r, self._mjr = getattr(self, "_mjr", None), None
-        if r is not None:
-            r.close()
 
     def close(self) -> None:
         """Free the GL renderer (the env can be reset and rendered again afterwards)."""
