@@ -133,6 +133,8 @@ _GL_STARTED: list[bool] = []
 def gl_started() -> bool:
     """Whether this process has made a GL context to render MuJoCo (then env workers are not forked)."""
     return bool(_GL_STARTED)
+
+
 _AT_EXIT: list[bool] = []
 
 
