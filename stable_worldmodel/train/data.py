@@ -234,12 +234,12 @@ class TrainData:
         frames = raw[keys.PIXELS]
         t = frames.shape[1]
         goal_keys = list(self.goals)
+        goal_rows = {}
         if goal_keys:
             generator = generator or torch.Generator().manual_seed(self.seed * 1_000_003 + int(index[0]))
             eps, starts = self.dataset._locate_many(index)
-            frames = torch.cat(
-                [frames, *(self._goal_frames(self.goals[k].sample(eps, starts, generator)) for k in goal_keys)], dim=1
-            )
+            goal_rows = {k: self.goals[k].sample(eps, starts, generator) for k in goal_keys}
+            frames = torch.cat([frames, *(self._goal_frames(goal_rows[k]) for k in goal_keys)], dim=1)
         cfg = self.cfg
         pixels = preprocess_images(
             frames.to(self.device, non_blocking=True), cfg.image_mean, cfg.image_std, cfg.image_size
@@ -247,7 +247,21 @@ class TrainData:
         out = {keys.PIXELS: pixels[:, :t], **self._normalized(raw)}
         for i, key in enumerate(goal_keys):
             out[key] = pixels[:, t + i : t + i + 1]
+            out.update(self._goal_extras(key, goal_rows[key]))
         return self._with_reward(index, out)
+
+    def _goal_extras(self, goal_pixels_key: str, rows: np.ndarray) -> dict[str, torch.Tensor]:
+        """The extra columns (proprio, ...) at the goal rows, normalized as the window's: ``goal_<k>``
+        beside ``goal_pixels`` (``actor_goal_<k>`` beside ``actor_goal_pixels``), each ``(B, 1, P)``."""
+        prefix = goal_pixels_key[: -len(keys.PIXELS)]
+        out = {}
+        for key, norm in self.extra_normalizers.items():
+            if key.startswith(keys.goal_key("")):
+                continue  # the episode's own goal column: a hindsight goal has none
+            values = np.stack([self.dataset._read(key, int(r), int(r) + 1)[0] for r in rows])
+            values = torch.nan_to_num(torch.as_tensor(values, dtype=torch.float32, device=self.device), 0.0)
+            out[prefix + key] = norm.torch(values.reshape(len(rows), 1, -1))
+        return out
 
     def use_features(self, features: np.ndarray) -> None:
         """Serve ``pixels_emb (B, T, ...)`` gathered from ``features`` (one row per dataset row,

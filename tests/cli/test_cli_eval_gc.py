@@ -87,6 +87,20 @@ def test_trained_gcbc_beats_the_random_policy(swm, home, tmp_path):
     assert "plan" not in gc and "history_size" not in gc  # one frame, nothing planned
 
 
+def test_a_gcbc_reading_proprio_acts_from_the_worlds_proprio_and_goal_proprio(swm, home, tmp_path):
+    """Upstream's gcbc default (use_proprio_encoder): proprio and the goal's proprio, normalized as in training."""
+    from stable_worldmodel.train import train
+
+    train("gcbc", "toy", "tiny", steps=300, name="prop", seed=0, device="cpu", progress=False,
+          **{**NET, "proprio_dim": 2})  # fmt: skip
+    protocol = json.loads((home / "checkpoints" / "prop" / "protocol.json").read_text())
+    assert set(protocol["normalizers"]) == {"action", "proprio"}
+    args = ("--episodes", "20", "--num-envs", "4", "--max-steps", "40", *SMALL)
+    gc = evaluate(swm, "gc:prop", tmp_path / "gc.json", *args)
+    random = evaluate(swm, "random", tmp_path / "random.json", *args)
+    assert gc["successes"] >= random["successes"] + 5 and gc["success_rate"] >= 50.0, (gc, random)
+
+
 def test_history_and_action_blocks_reach_the_policy(swm, home, tmp_path):
     """A policy on 2 frames and blocks of 2 actions: the World keeps 2 frames,
     the policy acts with the first action of each block."""

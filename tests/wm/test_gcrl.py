@@ -512,6 +512,36 @@ def test_train_data_gives_goal_frames(toy_root):
     )  # fixed validation goals
 
 
+def test_train_data_gives_the_goal_rows_proprio(toy_root):
+    """Upstream's gcbc reads proprio (use_proprio_encoder): the goal's proprio is the goal row's, normalized alike."""
+    from stable_worldmodel.train.data import TrainData
+
+    cfg = config("gcivl", goal_probabilities={"current": 1.0}, actor_goal_probabilities={"uniform": 1.0}, proprio_dim=2)
+    data = TrainData("toy", cfg, seed=0, device=torch.device("cpu"), cache_dir=str(toy_root))
+    out = data.train_batch(torch.Generator().manual_seed(0), 4)
+    assert out[keys.PROPRIO].shape == (4, 3, 2)
+    assert out["goal_proprio"].shape == out["actor_goal_proprio"].shape == (4, 1, 2)
+    torch.testing.assert_close(out["goal_proprio"][:, 0], out[keys.PROPRIO][:, 1])  # "current": the last history row
+    assert not torch.equal(out["actor_goal_proprio"], out["goal_proprio"])  # uniform: later rows
+
+
+def test_proprio_joins_every_token_of_frames_and_goal():
+    model = wm.make("gcbc", action_dim=ACTION_DIM, preset="tiny", **{**NET, "proprio_dim": 2, "proprio_emb_dim": 4})
+    assert set(model.extra_encoders) == {keys.PROPRIO}
+    info = {
+        keys.PIXELS: images(B, 2),
+        keys.GOAL: images(B, 1),
+        keys.PROPRIO: torch.randn(B, 2, 2),
+        "goal_proprio": torch.randn(B, 1, 2),
+    }
+    action = model.get_action(dict(info))
+    assert action.shape == (B, ACTION_DIM)
+    moved = model.get_action({**info, "goal_proprio": info["goal_proprio"] + 1.0})
+    assert not torch.allclose(action, moved)  # the goal's proprio steers the action
+    with pytest.raises(UnknownNameError, match="goal_proprio"):
+        model.get_action({k: v for k, v in info.items() if k != "goal_proprio"})
+
+
 def test_train_data_needs_pixels(_stablewm_home):
     from stable_worldmodel.data.writer import HDF5Writer
     from stable_worldmodel.train.data import TrainData

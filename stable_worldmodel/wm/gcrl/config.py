@@ -22,7 +22,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
+from ... import keys
 from ...errors import ConfigError, did_you_mean, unknown_name
+from ..base import check_positive_int
 from ..config import IMAGENET_MEAN, IMAGENET_STD, ImageEncoderConfig, PredictorConfig
 
 __all__ = ["GOAL_SAMPLING", "GCBCConfig", "GCIQLConfig", "GCIVLConfig", "GCRLConfig", "check_goal_probabilities"]
@@ -134,7 +136,11 @@ class GCRLConfig(ImageEncoderConfig, PredictorConfig):
     ``expectile``, ``awr_alpha``, ``value_ema`` (EMA coefficient of the target heads),
     ``actor_encoder_grad`` (the actor term trains the encoder too: True, as our encoders start
     from scratch; upstream froze it, see :mod:`stable_worldmodel.wm.gcrl.algorithms`). Goals:
-    see the module docstring. ``num_preds`` is not used.
+    see the module docstring. Proprioception (upstream's default, ``use_proprio_encoder``):
+    ``proprio_dim > 0`` reads the dataset's ``proprio`` column (that many numbers), embedded to
+    ``proprio_emb_dim`` by an :class:`~stable_worldmodel.wm.gcrl.module.Embedder` and joined to
+    every image token, for the observed frames and the goal frame alike; the policy then acts
+    from ``proprio`` / ``goal_proprio`` infos too. ``num_preds`` is not used.
     """
 
     target: ClassVar[str] = f"{_P}.GCRL"
@@ -157,6 +163,8 @@ class GCRLConfig(ImageEncoderConfig, PredictorConfig):
         "goal_probabilities": "How hindsight goals are drawn: {random, geometric, uniform, current: p}, summing to 1.",
         "actor_goal_probabilities": "Goal mixture of the actor term, as goal_probabilities (empty: the same goals).",
         "goal_gamma": "Geometric goal sampling: the goal is k ~ Geometric(1 - goal_gamma) frames ahead.",
+        "proprio_dim": "Numbers of the dataset's proprio column the policy reads, of its frames and goal (0: none).",
+        "proprio_emb_dim": "Width of the proprio embedding joined to every image token (proprio_dim > 0).",
     }
 
     pool_type: str = "attention"
@@ -173,10 +181,14 @@ class GCRLConfig(ImageEncoderConfig, PredictorConfig):
     goal_probabilities: dict[str, float] = field(default_factory=lambda: {"uniform": 1.0})
     actor_goal_probabilities: dict[str, float] = field(default_factory=dict)
     goal_gamma: float = 0.99
+    proprio_dim: int = 0
+    proprio_emb_dim: int = 10
 
     def __post_init__(self) -> None:
         super().__post_init__()
         name = type(self).__name__
+        check_positive_int(name, "proprio_dim", self.proprio_dim, minimum=0)
+        check_positive_int(name, "proprio_emb_dim", self.proprio_emb_dim)
         for key, allowed in (("pool_type", POOL_TYPES), ("value_head", VALUE_HEADS)):
             value = getattr(self, key)
             if value not in allowed:
@@ -224,6 +236,16 @@ class GCRLConfig(ImageEncoderConfig, PredictorConfig):
         return self.history_size + (0 if self.algorithm == "gcbc" else 1)
 
     @property
+    def extra_columns(self) -> dict[str, int]:
+        """``proprio`` (its width) when ``proprio_dim > 0``."""
+        return {keys.PROPRIO: self.proprio_dim} if self.proprio_dim else {}
+
+    @property
+    def token_dim(self) -> int:
+        """Width of the heads' tokens: the encoder's, plus the proprio embedding when there is one."""
+        return self.encoder_dim + (self.proprio_emb_dim if self.proprio_dim else 0)
+
+    @property
     def num_patches(self) -> int:
         """Tokens per frame: 1 with the CNN encoder, ``(image_size / patch_size)^2`` with a ViT."""
         return (self.image_size // self.patch_size) ** 2 if self.encoder == "vit" else 1
@@ -243,7 +265,7 @@ class GCRLConfig(ImageEncoderConfig, PredictorConfig):
             "_target_": f"{_P}.module.{target}",
             "num_patches": self.num_patches,
             "num_frames": self.history_size,
-            "dim": self.encoder_dim,
+            "dim": self.token_dim,
             "depth": self.depth,
             "heads": self.heads,
             "mlp_dim": self.mlp_dim,
@@ -278,6 +300,14 @@ class GCRLConfig(ImageEncoderConfig, PredictorConfig):
                 else self._head("Predictor", out_dim=1, pool_type="mean")
             )
             tree["value_predictor"] = self._ema(value)
+        if self.proprio_dim:
+            tree["extra_encoders"] = {
+                keys.PROPRIO: {
+                    "_target_": f"{_P}.module.Embedder",
+                    "in_chans": self.proprio_dim,
+                    "emb_dim": self.proprio_emb_dim,
+                }
+            }
         if self.algorithm == "gciql":
             tree["critic_predictor"] = self._ema(
                 self._head("QPredictor", action_dim=block, q_hidden_dim=self.q_hidden, pool_type="mean")
