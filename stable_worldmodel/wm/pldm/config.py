@@ -7,7 +7,19 @@ from typing import Any, ClassVar
 
 from ..config import IMAGENET_MEAN, IMAGENET_STD, JEPAConfig
 
-__all__ = ["PLDMConfig"]
+__all__ = ["PLDMConfig", "UPSTREAM_LOSS_WEIGHTS"]
+
+#: the term weights of upstream's recipe (``scripts/train/config/pldm.yaml``): every enabled term is added with
+#: its weight, zero included; temporal straightening is disabled there (the ``paper`` preset's weights)
+UPSTREAM_LOSS_WEIGHTS = {
+    "std_loss": 18.0,
+    "std_t_loss": 0.7,
+    "cov_loss": 12.0,
+    "cov_t_loss": 0.0,
+    "temp_align_loss": 0.2,
+    "idm_loss": 0.0,
+    "temp_straight_loss": 0.0,
+}
 
 
 @dataclass
@@ -57,6 +69,7 @@ class PLDMConfig(JEPAConfig):
             "warmup_steps": 1000,
             "steps": 100000,
             "idm_hidden": 512,
+            "loss_weights": dict(UPSTREAM_LOSS_WEIGHTS),
         },
     }
 

@@ -77,8 +77,8 @@ class PLDM(JEPA):
             terms["temp_straight_loss"] = self.straightening.module(emb)
         total = pred_loss
         for name, weight in self.loss_weights.items():
-            if weight and name in terms:
-                total = total + weight * terms[name]
+            if name in terms:  # a zero weight too, as upstream's recipe adds every enabled term (its modules then
+                total = total + weight * terms[name]  # get zero gradients, which AdamW's weight decay still acts on)
         return {"loss": total, **terms, "emb": emb}
 
 
