@@ -1,0 +1,100 @@
+"""Every model on upstream's Push-T protocol, side by side with the random floor on the same starts.
+
+Usage: python bench/bench_models_pusht.py [--models lewm pldm gcbc] [--episodes 1000] [--steps N] [--num-envs 10]
+       [--train-minutes M] [--set KEY=VALUE ...] [--keep]
+
+What it runs, as a user would (the printed commands are the ones executed):
+
+1. ``swm collect swm/PushT-v1 --policy weak`` (upstream's collector: ``WeakPolicy``, random targets around the block);
+2. ``swm train MODEL --dataset pusht-weak --preset tiny`` for each model (``gcbc`` reads proprio, as upstream's);
+3. ``swm eval swm/PushT-v1 --policy P --protocol upstream --from-dataset pusht-weak`` for each model and for the
+   random policy: 50 held-out starts, goal 25 steps later, budget 50, CEM 300 x 30, horizon 5, receding horizon 5,
+   the final-state cost, no subgoals; every policy from the same starts.
+
+Prints a markdown table (success with its 95% interval, times) and the commands. Runs in a scratch
+``$STABLEWM_HOME`` unless ``--keep``. Never asserts. On this 2-core CPU: collection ~2 min per 1000 episodes,
+a tiny model 2-10 min of training, an evaluation 2-5 min.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import shlex
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ENV = "swm/PushT-v1"
+DATASET = "pusht-weak"
+#: per model, what upstream's recipe adds (the goal-conditioned policies read proprio)
+EXTRA = {"gcbc": ["--set", "proprio_dim=4"], "gcivl": ["--set", "proprio_dim=4"], "gciql": ["--set", "proprio_dim=4"]}
+
+
+def swm(*args: str) -> float:
+    """Run ``swm ARGS`` (this interpreter's package); its seconds. Exits on failure."""
+    cmd = [sys.executable, "-m", "stable_worldmodel.cli", *args]
+    print("$ swm " + shlex.join(args), flush=True)
+    start = time.perf_counter()
+    done = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    if done.returncode:
+        sys.exit(f"swm {shlex.join(args)} failed:\n{done.stderr[-3000:]}")
+    return time.perf_counter() - start
+
+
+def evaluate(policy: str, out: Path, num_envs: int) -> tuple[dict, float]:
+    seconds = swm("eval", ENV, "--policy", policy, "--protocol", "upstream", "--from-dataset", DATASET,
+                  "--num-envs", str(num_envs), "--json", str(out))  # fmt: skip
+    return json.loads(out.read_text()), seconds
+
+
+def cell(record: dict) -> str:
+    lo, hi = record["ci95"]
+    return f"{record['success_rate']:.0f}% [{lo:.1f}, {hi:.1f}]"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--models", nargs="+", default=["lewm", "pldm", "gcbc"])
+    parser.add_argument("--episodes", type=int, default=1000, help="weak-policy episodes to collect")
+    parser.add_argument("--steps", type=int, default=None, help="training steps (default: each preset's)")
+    parser.add_argument("--num-envs", type=int, default=10)
+    parser.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE", help="config overrides for every model")
+    parser.add_argument("--keep", action="store_true", help="use $STABLEWM_HOME instead of a scratch folder")
+    args = parser.parse_args()
+    home = os.environ.get("STABLEWM_HOME") if args.keep else tempfile.mkdtemp(prefix="bench_pusht_")
+    os.environ["STABLEWM_HOME"] = str(home)
+    out = Path(home) / "bench_pusht"
+    out.mkdir(parents=True, exist_ok=True)
+    collect = swm("collect", ENV, "--policy", "weak", "--episodes", str(args.episodes), "--num-envs", "4",
+                  "--name", DATASET)  # fmt: skip
+    rows = []
+    floor, floor_s = evaluate("random", out / "random.json", args.num_envs)
+    rows.append(("random", "-", cell(floor), f"eval {floor_s:.0f} s"))
+    for model in args.models:
+        train = ["train", model, "--dataset", DATASET, "--preset", "tiny", "--name", f"pusht-{model}"]
+        train += ["--steps", str(args.steps)] if args.steps else []
+        for item in args.set:
+            train += ["--set", item]
+        trained = swm(*train, *EXTRA.get(model, []))
+        prefix = "gc" if model in ("gcbc", "gcivl", "gciql") else "wm"
+        record, seconds = evaluate(f"{prefix}:pusht-{model}", out / f"{model}.json", args.num_envs)
+        same = (record["episodes_idx"], record["start_steps"]) == (floor["episodes_idx"], floor["start_steps"])
+        rows.append((model, f"{trained:.0f} s", cell(record), f"eval {seconds:.0f} s" + ("" if same else " (!)")))
+        print(f"| {' | '.join(rows[-1])} |", flush=True)
+    print(
+        f"\n{ENV}, upstream's protocol ({floor['protocol_name']}: 50 held-out starts of {DATASET}, goal +25 steps, "
+        f"budget 50); {args.episodes} weak-policy episodes collected in {collect:.0f} s; tiny presets; this machine"
+    )
+    print("| policy | training | success (95% CI) | time |")
+    print("| --- | ---: | ---: | ---: |")
+    for row in rows:
+        print(f"| {' | '.join(row)} |")
+    print("(!) marks a policy evaluated from other starts than the random floor's")
+
+
+if __name__ == "__main__":
+    main()
