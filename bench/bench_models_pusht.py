@@ -1,7 +1,7 @@
 """Every model on upstream's Push-T protocol, side by side with the random floor on the same starts.
 
 Usage: python bench/bench_models_pusht.py [--models lewm pldm gcbc] [--episodes 1000] [--steps N] [--num-envs 10]
-       [--train-minutes M] [--set KEY=VALUE ...] [--keep]
+       [--harder G] [--set KEY=VALUE ...] [--keep]
 
 What it runs, as a user would (the printed commands are the ones executed):
 
@@ -9,7 +9,8 @@ What it runs, as a user would (the printed commands are the ones executed):
 2. ``swm train MODEL --dataset pusht-weak --preset tiny`` for each model (``gcbc`` reads proprio, as upstream's);
 3. ``swm eval swm/PushT-v1 --policy P --protocol upstream --from-dataset pusht-weak`` for each model and for the
    random policy: 50 held-out starts, goal 25 steps later, budget 50, CEM 300 x 30, horizon 5, receding horizon 5,
-   the final-state cost, no subgoals; every policy from the same starts.
+   the final-state cost, no subgoals; every policy from the same starts (``--harder G``: also with the goal G
+   steps on, where the random floor is lower).
 
 Prints a markdown table (success with its 95% interval, times) and the commands. Runs in a scratch
 ``$STABLEWM_HOME`` unless ``--keep``. Never asserts. On this 2-core CPU: collection ~2 min per 1000 episodes,
@@ -45,9 +46,10 @@ def swm(*args: str) -> float:
     return time.perf_counter() - start
 
 
-def evaluate(policy: str, out: Path, num_envs: int) -> tuple[dict, float]:
+def evaluate(policy: str, out: Path, num_envs: int, offset: int | None = None) -> tuple[dict, float]:
+    extra = ["--goal-offset", str(offset)] if offset else []
     seconds = swm("eval", ENV, "--policy", policy, "--protocol", "upstream", "--from-dataset", DATASET,
-                  "--num-envs", str(num_envs), "--json", str(out))  # fmt: skip
+                  "--num-envs", str(num_envs), "--json", str(out), *extra)  # fmt: skip
     return json.loads(out.read_text()), seconds
 
 
@@ -64,6 +66,7 @@ def main() -> None:
     parser.add_argument("--num-envs", type=int, default=10)
     parser.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE", help="config overrides for every model")
     parser.add_argument("--keep", action="store_true", help="use $STABLEWM_HOME instead of a scratch folder")
+    parser.add_argument("--harder", type=int, default=None, metavar="G", help="also evaluate with the goal G steps on")
     args = parser.parse_args()
     home = os.environ.get("STABLEWM_HOME") if args.keep else tempfile.mkdtemp(prefix="bench_pusht_")
     os.environ["STABLEWM_HOME"] = str(home)
@@ -73,7 +76,8 @@ def main() -> None:
                   "--name", DATASET)  # fmt: skip
     rows = []
     floor, floor_s = evaluate("random", out / "random.json", args.num_envs)
-    rows.append(("random", "-", cell(floor), f"eval {floor_s:.0f} s"))
+    harder = evaluate("random", out / "random_harder.json", args.num_envs, args.harder)[0] if args.harder else None
+    rows.append(("random", "-", cell(floor), *([cell(harder)] if harder else []), f"eval {floor_s:.0f} s"))
     for model in args.models:
         train = ["train", model, "--dataset", DATASET, "--preset", "tiny", "--name", f"pusht-{model}"]
         train += ["--steps", str(args.steps)] if args.steps else []
@@ -83,14 +87,20 @@ def main() -> None:
         prefix = "gc" if model in ("gcbc", "gcivl", "gciql") else "wm"
         record, seconds = evaluate(f"{prefix}:pusht-{model}", out / f"{model}.json", args.num_envs)
         same = (record["episodes_idx"], record["start_steps"]) == (floor["episodes_idx"], floor["start_steps"])
-        rows.append((model, f"{trained:.0f} s", cell(record), f"eval {seconds:.0f} s" + ("" if same else " (!)")))
+        far = []
+        if args.harder:
+            far = [
+                cell(evaluate(f"{prefix}:pusht-{model}", out / f"{model}_harder.json", args.num_envs, args.harder)[0])
+            ]
+        rows.append((model, f"{trained:.0f} s", cell(record), *far, f"eval {seconds:.0f} s" + ("" if same else " (!)")))
         print(f"| {' | '.join(rows[-1])} |", flush=True)
     print(
         f"\n{ENV}, upstream's protocol ({floor['protocol_name']}: 50 held-out starts of {DATASET}, goal +25 steps, "
         f"budget 50); {args.episodes} weak-policy episodes collected in {collect:.0f} s; tiny presets; this machine"
     )
-    print("| policy | training | success (95% CI) | time |")
-    print("| --- | ---: | ---: | ---: |")
+    far = [f"goal +{args.harder}"] if args.harder else []
+    print("| " + " | ".join(["policy", "training", "success (95% CI)", *far, "time"]) + " |")
+    print("| --- | ---: | ---: |" + " ---: |" * len(far) + " ---: |")
     for row in rows:
         print(f"| {' | '.join(row)} |")
     print("(!) marks a policy evaluated from other starts than the random floor's")

@@ -50,12 +50,13 @@ class RunFacts:
         typed = protocol if isinstance(protocol, RunProtocol) else RunProtocol.from_dict(protocol)
         raw = typed.raw
         recorded_size = "dataset_image_shape" in raw or "image_size" in raw
+        no_frames = raw.get("dataset_image_shape") == []  # a state-input model: no image size to match
         return cls(
             run=run,
             env=typed.env or _manifest_env(typed.dataset_path),
             dataset=typed.dataset,
-            frame_size=typed.frame_size if recorded_size else None,
-            model_size=typed.image_size if "image_size" in raw else None,
+            frame_size=typed.frame_size if recorded_size and not no_frames else None,
+            model_size=typed.image_size if "image_size" in raw and not no_frames else None,
             action_dim=typed.action_dim,
             frameskip=typed.frameskip if "frameskip" in raw else None,
         )

@@ -87,7 +87,9 @@ class TrainData:
             self.dataset = dataset
         self.extra_widths = extra_columns(cfg)
         self.extra_keys = list(self.extra_widths)
-        missing = [k for k in (keys.PIXELS, keys.ACTION, *self.extra_keys) if k not in self.dataset.column_names]
+        self.reads_pixels = bool(getattr(cfg, "reads_pixels", True))  # False: a state-input model
+        self.frame_keys = [keys.PIXELS] if self.reads_pixels else []
+        missing = [k for k in (*self.frame_keys, keys.ACTION, *self.extra_keys) if k not in self.dataset.column_names]
         if missing:
             raise DatasetFormatError(
                 f"Training requires dataset columns {missing} in {self.path}, got {sorted(self.dataset.column_names)}"
@@ -107,16 +109,18 @@ class TrainData:
                 self.path,
                 frameskip=cfg.frameskip,
                 num_steps=cfg.num_steps,
-                keys_to_load=[keys.PIXELS, keys.ACTION, *self.extra_keys],
+                keys_to_load=[*self.frame_keys, keys.ACTION, *self.extra_keys],
             )
-        shape, _ = self.dataset.column_shape(keys.PIXELS)
-        if len(shape) != 3 or shape[-1] not in (1, 3):
-            raise DatasetFormatError(f"Training requires pixels of shape (N, H, W, 3), got {shape} in {self.path}")
-        if shape[-1] != len(cfg.image_mean):
-            raise ConfigError(
-                f"Training requires {len(cfg.image_mean)}-channel images, got {shape[-1]} channels in {self.path}"
-            )
-        self.image_shape = tuple(int(v) for v in shape)
+        self.image_shape: tuple[int, ...] = ()
+        if self.reads_pixels:
+            shape, _ = self.dataset.column_shape(keys.PIXELS)
+            if len(shape) != 3 or shape[-1] not in (1, 3):
+                raise DatasetFormatError(f"Training requires pixels of shape (N, H, W, 3), got {shape} in {self.path}")
+            if shape[-1] != len(cfg.image_mean):
+                raise ConfigError(
+                    f"Training requires {len(cfg.image_mean)}-channel images, got {shape[-1]} channels in {self.path}"
+                )
+            self.image_shape = tuple(int(v) for v in shape)
         self.action_dim = int(np.prod(self.dataset.column_shape(keys.ACTION)[0]))
         for key, expected in self.extra_widths.items():
             width = int(np.prod(self.dataset.column_shape(key)[0]))
@@ -231,6 +235,8 @@ class TrainData:
         if self.features is not None:
             return self._with_reward(index, self._feature_batch(index))
         raw = self.dataset._batch(index)
+        if not self.reads_pixels:  # a state-input model: the normalized columns are the batch
+            return self._with_reward(index, self._normalized(raw))
         frames = raw[keys.PIXELS]
         t = frames.shape[1]
         goal_keys = list(self.goals)

@@ -133,6 +133,12 @@ class WorldModelConfig:
         """Dataset columns the model reads besides pixels and actions, with their widths (none here)."""
         return {}
 
+    @property
+    def reads_pixels(self) -> bool:
+        """Whether the model observes images (False: a state-input model, which reads its
+        :attr:`extra_columns` and never the dataset's pixels)."""
+        return True
+
     @classmethod
     def field_help(cls) -> dict[str, str]:
         """``{field: meaning}`` of every field of this config, from the ``FIELD_HELP`` tables of its

@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
+from .. import keys
 from ..errors import ConfigError, did_you_mean
 from .base import WorldModelConfig, check_positive_int
 
@@ -116,6 +117,9 @@ class ImageEncoderConfig(WorldModelConfig):
         "vit_overrides": "ViTConfig fields replacing the size's (e.g. num_hidden_layers), with encoder=vit.",
     }
 
+    #: the encoders this config can build
+    ENCODERS: ClassVar[tuple[str, ...]] = ("cnn", "vit")
+
     encoder: str = "cnn"
     embed_dim: int = 64
     cnn_width: int = 8
@@ -126,10 +130,10 @@ class ImageEncoderConfig(WorldModelConfig):
     def __post_init__(self) -> None:
         super().__post_init__()
         name = type(self).__name__
-        if self.encoder not in ("cnn", "vit"):
+        if self.encoder not in self.ENCODERS:
             raise ConfigError(
-                f"{name} requires encoder 'cnn' or 'vit', got "
-                f"{self.encoder!r}.{did_you_mean(self.encoder, ['cnn', 'vit'])}"
+                f"{name} requires encoder in {self.ENCODERS}, got "
+                f"{self.encoder!r}.{did_you_mean(self.encoder, self.ENCODERS)}"
             )
         for key in ("embed_dim", "cnn_width", "patch_size"):
             check_positive_int(name, key, getattr(self, key))
@@ -176,15 +180,58 @@ class JEPAConfig(ImageEncoderConfig, PredictorConfig):
     #: planning may aim at waypoints of the training data (the embedding of a frame is a goal)
     subgoal_graph: ClassVar[bool] = True
 
+    ENCODERS: ClassVar[tuple[str, ...]] = ("cnn", "vit", "state")
     FIELD_HELP: ClassVar[dict[str, str]] = {
         "projector_hidden": "Hidden width of the projector heads (0: no projectors; the encoder width must be D).",
+        "encoder": "Encoder trained with the model: cnn (a strided CNN), vit (a ViT from scratch) or state (an MLP "
+        "over the dataset column state_key instead of the pixels).",
+        "state_key": "encoder=state: the column (and info key) the model observes, e.g. state or proprio.",
+        "state_dim": "encoder=state: numbers in that column (its width).",
+        "state_width": "encoder=state: hidden width of the state encoder's MLP.",
     }
 
     projector_hidden: int = 256
+    state_key: str = keys.STATE
+    state_dim: int = 0
+    state_width: int = 256
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        check_positive_int(type(self).__name__, "projector_hidden", self.projector_hidden, minimum=0)
+        name = type(self).__name__
+        check_positive_int(name, "projector_hidden", self.projector_hidden, minimum=0)
+        check_positive_int(name, "state_width", self.state_width)
+        check_positive_int(name, "state_dim", self.state_dim, minimum=0)
+        if self.encoder == "state" and (not self.state_dim or self.state_key in (keys.PIXELS, keys.ACTION)):
+            raise ConfigError(
+                f"{name} with encoder='state' requires state_dim > 0 (the width of the dataset column it reads) and "
+                f"state_key a numeric column other than pixels and action, got state_dim={self.state_dim}, "
+                f"state_key={self.state_key!r}; e.g. --set encoder=state --set state_dim=7 (swm/PushT-v1's state)"
+            )
+
+    @property
+    def extra_columns(self) -> dict[str, int]:
+        """``state_key`` (its width) with the state encoder."""
+        return {self.state_key: self.state_dim} if self.encoder == "state" else {}
+
+    @property
+    def reads_pixels(self) -> bool:
+        return self.encoder != "state"
+
+    @classmethod
+    def subgoal_graph_unavailable(cls, config: Any) -> str | None:
+        if (config or {}).get("encoder") == "state":
+            return "a state-input model plans on states, and the waypoint graph is built from the frames"
+        return super().subgoal_graph_unavailable(config)
+
+    def encoder_tree(self) -> dict[str, Any]:
+        if self.encoder == "state":
+            return {
+                "_target_": f"{_P}.encoders.StateEncoder",
+                "input_dim": self.state_dim,
+                "hidden_size": self.encoder_dim,
+                "width": self.state_width,
+            }
+        return super().encoder_tree()
 
     # -- the model as a _target_ tree -----------------------------------------------------------
     def _mlp(self, d_in: int, d_out: int, hidden: int, batchnorm: bool = True) -> dict[str, Any]:
@@ -224,5 +271,8 @@ class JEPAConfig(ImageEncoderConfig, PredictorConfig):
         return tree
 
     def model_kwargs(self, action_dim: int) -> dict[str, Any]:
-        """Extra keyword arguments of the model class (training knobs)."""
-        return {"num_preds": self.num_preds, "history_size": self.history_size}
+        """Extra keyword arguments of the model class (training knobs; the observed key of a state-input model)."""
+        kwargs: dict[str, Any] = {"num_preds": self.num_preds, "history_size": self.history_size}
+        if self.encoder == "state":
+            kwargs["obs_key"] = self.state_key
+        return kwargs

@@ -110,3 +110,26 @@ class ConvEncoder(nn.Module):
             )
         feat = self.convs(pixels.to(self.head.weight.dtype))
         return EncoderOutput(self.head(feat.flatten(1)).unsqueeze(1))
+
+
+class StateEncoder(nn.Module):
+    """MLP over a state vector: ``(N, input_dim) -> last_hidden_state (N, 1, hidden_size)``, the
+    encoder of a JEPA that reads a dataset column (``state``, ``proprio``) instead of pixels.
+    Linear, LayerNorm, GELU, Linear; ``config.hidden_size`` as a ViT's config."""
+
+    def __init__(self, input_dim: int, hidden_size: int = 64, width: int = 256):
+        super().__init__()
+        for name, value in (("input_dim", input_dim), ("hidden_size", hidden_size), ("width", width)):
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ConfigError(f"StateEncoder requires {name} to be a positive int, got {value!r}")
+        self.config = SimpleNamespace(input_dim=input_dim, hidden_size=hidden_size, width=width)
+        self.net = nn.Sequential(
+            nn.Linear(input_dim, width), nn.LayerNorm(width), nn.GELU(), nn.Linear(width, hidden_size)
+        )
+
+    def forward(self, state: torch.Tensor, **kwargs: Any) -> EncoderOutput:
+        if state.ndim != 2 or state.shape[1] != self.config.input_dim:
+            raise SpaceError(
+                f"StateEncoder requires states of shape (N, {self.config.input_dim}), got {tuple(state.shape)}"
+            )
+        return EncoderOutput(self.net(state).unsqueeze(1))

@@ -61,6 +61,11 @@ class JEPA(nn.Module):
     as ``encoder(pixels, interpolate_pos_encoding=True)`` and its ``last_hidden_state[:, 0]``
     (the CLS token of a ViT; the only token of :class:`~stable_worldmodel.wm.encoders.ConvEncoder`)
     goes through ``projector``.
+
+    ``obs_key`` (keyword, default ``"pixels"``): the info key the model observes. Another key
+    (``"state"``, ``"proprio"``: vectors ``(..., S)``, normalized as in training) makes a
+    state-input model, with an encoder such as :class:`~stable_worldmodel.wm.encoders.StateEncoder`;
+    its goal is then ``goal_<obs_key>`` instead of the goal image ``goal``.
     """
 
     def __init__(
@@ -70,9 +75,12 @@ class JEPA(nn.Module):
         action_encoder: nn.Module,
         projector: nn.Module | None = None,
         pred_proj: nn.Module | None = None,
+        *,
+        obs_key: str = keys.PIXELS,
         **kwargs: Any,
     ):
         super().__init__()
+        self.obs_key = str(obs_key)
         self.encoder = encoder
         self.predictor = predictor
         self.action_encoder = action_encoder
@@ -87,6 +95,7 @@ class JEPA(nn.Module):
         super().__setstate__(state)
         self.__dict__.setdefault("extra_config", {})
         self.__dict__.setdefault("goal_cost", "final")
+        self.__dict__.setdefault("obs_key", keys.PIXELS)
 
     # -- sizes --------------------------------------------------------------------------------
     @property
@@ -113,10 +122,27 @@ class JEPA(nn.Module):
         hidden = out.last_hidden_state if hasattr(out, "last_hidden_state") else out["last_hidden_state"]
         return self.projector(hidden[:, 0]).reshape(*lead, -1)
 
+    @property
+    def goal_key(self) -> str:
+        """The info key of the goal observation: ``goal`` (an image) or ``goal_<obs_key>``."""
+        return keys.GOAL if self.obs_key == keys.PIXELS else keys.goal_key(self.obs_key)
+
+    def encode_obs(self, obs: torch.Tensor) -> torch.Tensor:
+        """Observations ``(..., C, h, w)`` (images) or ``(..., S)`` (``obs_key`` a state) -> ``(..., D)``."""
+        if self.obs_key == keys.PIXELS:
+            return self.encode_pixels(obs)
+        lead = obs.shape[:-1]
+        out = self.encoder(obs.reshape(-1, obs.shape[-1]).to(self._dtype()))
+        hidden = out.last_hidden_state if hasattr(out, "last_hidden_state") else out["last_hidden_state"]
+        return self.projector(hidden[:, 0]).reshape(*lead, -1)
+
+    def _obs_rank(self) -> int:
+        return 3 if self.obs_key == keys.PIXELS else 1
+
     def encode(self, info: dict) -> dict:
-        """Add ``emb: (B, T, D)`` from ``pixels: (B, T, C, h, w)``, and ``act_emb: (B, T, D)``
-        from ``action: (B, T, A)`` when present. Returns the same dict."""
-        info[EMB] = self.encode_pixels(_require(info, keys.PIXELS, f"{type(self).__name__}.encode"))
+        """Add ``emb: (B, T, D)`` from ``pixels: (B, T, C, h, w)`` (or ``info[obs_key]: (B, T, S)``),
+        and ``act_emb: (B, T, D)`` from ``action: (B, T, A)`` when present. Returns the same dict."""
+        info[EMB] = self.encode_obs(_require(info, self.obs_key, f"{type(self).__name__}.encode"))
         if keys.ACTION in info:
             info[ACT_EMB] = self.action_encoder(info[keys.ACTION])
         return info
@@ -137,10 +163,10 @@ class JEPA(nn.Module):
         if cache in info:
             emb = info[cache]
             return emb[:, 0] if s is not None and emb.ndim == 4 else emb
-        images = _require(info, key, f"{type(self).__name__}.get_cost")
-        if s is not None and images.ndim == 6:
-            images = images[:, 0]  # the S copies of an env's info are views of one tensor
-        emb = self.encode_pixels(images)
+        obs = _require(info, key, f"{type(self).__name__}.get_cost")
+        if s is not None and obs.ndim == 3 + self._obs_rank():
+            obs = obs[:, 0]  # the S copies of an env's info are views of one tensor
+        emb = self.encode_obs(obs)
         info[cache] = emb.unsqueeze(1).expand(b, s, *emb.shape[1:]) if s is not None else emb
         return emb
 
@@ -158,7 +184,7 @@ class JEPA(nn.Module):
         squeeze = action_sequence.ndim == 3
         cand = action_sequence.unsqueeze(1) if squeeze else action_sequence
         b, s, h, _ = cand.shape
-        ctx = self._context(info, keys.PIXELS, EMB, b, None if squeeze else s)  # (B, T, D)
+        ctx = self._context(info, self.obs_key, EMB, b, None if squeeze else s)  # (B, T, D)
         t = ctx.shape[1]
         if h < t:
             raise ConfigError(
@@ -187,7 +213,7 @@ class JEPA(nn.Module):
         """Cost of ``action_candidates: (B, S, H, A)`` (normalized action blocks)
         to reach ``info["goal"]``: ``(B, S)``."""
         b, s = action_candidates.shape[:2]
-        self._context(info, keys.GOAL, GOAL_EMB, b, s)
+        self._context(info, self.goal_key, GOAL_EMB, b, s)
         self.rollout(info, action_candidates)
         return self.criterion(info)
 
@@ -195,16 +221,16 @@ class JEPA(nn.Module):
     def _teacher_forcing(self, batch: dict, history: int | None, num_preds: int) -> tuple[dict, torch.Tensor]:
         """Encode ``batch`` (``pixels (B, T, C, h, w)``, ``action (B, T, A)``) and predict the
         frames ``num_preds`` ahead of the first ``history`` ones; returns (encoded, pred_loss)."""
-        pixels = _require(batch, keys.PIXELS, f"{type(self).__name__}.loss")
+        obs = _require(batch, self.obs_key, f"{type(self).__name__}.loss")
         action = torch.nan_to_num(_require(batch, keys.ACTION, f"{type(self).__name__}.loss"), 0.0)
-        total = pixels.shape[1]
+        total = obs.shape[1]
         history = int(history or min(self.history_size, total - num_preds))
         if history < 1 or history + num_preds > total:
             raise ConfigError(
                 f"{type(self).__name__}.loss requires history + num_preds <= frames per sample, got history={history}, "
                 f"num_preds={num_preds} and {total} frames"
             )
-        out = self.encode({keys.PIXELS: pixels, keys.ACTION: action})
+        out = self.encode({self.obs_key: obs, keys.ACTION: action})
         emb, act_emb = out[EMB], out[ACT_EMB]
         pred = self.predict(emb[:, :history], act_emb[:, :history])
         target = emb[:, num_preds : num_preds + history]
