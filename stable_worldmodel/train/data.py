@@ -87,9 +87,9 @@ class TrainData:
             self.dataset = dataset
         self.extra_widths = extra_columns(cfg)
         self.extra_keys = list(self.extra_widths)
-        self.reads_pixels = bool(getattr(cfg, "reads_pixels", True))  # False: a state-input model
-        self.frame_keys = [keys.PIXELS] if self.reads_pixels else []
-        missing = [k for k in (*self.frame_keys, keys.ACTION, *self.extra_keys) if k not in self.dataset.column_names]
+        self.reads_pixels = bool(cfg.reads_pixels)  # False: a state-input model
+        frame_keys = [keys.PIXELS] if self.reads_pixels else []
+        missing = [k for k in (*frame_keys, keys.ACTION, *self.extra_keys) if k not in self.dataset.column_names]
         if missing:
             raise DatasetFormatError(
                 f"Training requires dataset columns {missing} in {self.path}, got {sorted(self.dataset.column_names)}"
@@ -109,7 +109,7 @@ class TrainData:
                 self.path,
                 frameskip=cfg.frameskip,
                 num_steps=cfg.num_steps,
-                keys_to_load=[*self.frame_keys, keys.ACTION, *self.extra_keys],
+                keys_to_load=[*frame_keys, keys.ACTION, *self.extra_keys],
             )
         self.image_shape: tuple[int, ...] = ()
         if self.reads_pixels:
