@@ -116,9 +116,11 @@ class JEPA(nn.Module):
     # -- verbs --------------------------------------------------------------------------------
     def encode_pixels(self, pixels: torch.Tensor) -> torch.Tensor:
         """``(..., C, h, w)`` float images -> ``(..., D)`` embeddings."""
-        lead = pixels.shape[:-3]
         flat = pixels.reshape(-1, *pixels.shape[-3:]).to(self._dtype())
-        out = self.encoder(flat, interpolate_pos_encoding=True)
+        return self._project(self.encoder(flat, interpolate_pos_encoding=True), pixels.shape[:-3])
+
+    def _project(self, out: Any, lead: torch.Size) -> torch.Tensor:
+        """The encoder output's first token (``last_hidden_state[:, 0]``) through ``projector``, as ``(*lead, D)``."""
         hidden = out.last_hidden_state if hasattr(out, "last_hidden_state") else out["last_hidden_state"]
         return self.projector(hidden[:, 0]).reshape(*lead, -1)
 
@@ -131,10 +133,7 @@ class JEPA(nn.Module):
         """Observations ``(..., C, h, w)`` (images) or ``(..., S)`` (``obs_key`` a state) -> ``(..., D)``."""
         if self.obs_key == keys.PIXELS:
             return self.encode_pixels(obs)
-        lead = obs.shape[:-1]
-        out = self.encoder(obs.reshape(-1, obs.shape[-1]).to(self._dtype()))
-        hidden = out.last_hidden_state if hasattr(out, "last_hidden_state") else out["last_hidden_state"]
-        return self.projector(hidden[:, 0]).reshape(*lead, -1)
+        return self._project(self.encoder(obs.reshape(-1, obs.shape[-1]).to(self._dtype())), obs.shape[:-1])
 
     def _obs_rank(self) -> int:
         return 3 if self.obs_key == keys.PIXELS else 1
