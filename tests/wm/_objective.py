@@ -39,6 +39,29 @@ def tiny_vit(sizes: dict):
     return transformers.ViTModel(config, add_pooling_layer=False, use_mask_token=False)
 
 
+def jepa_parts(sizes: dict) -> dict[str, torch.nn.Module]:
+    """The recordings' LeWM / PLDM modules (our classes, upstream's names): ``encoder`` (:func:`tiny_vit`),
+    ``predictor``, ``action_encoder``, ``projector`` and ``pred_proj`` (BatchNorm MLPs), ``hidden`` wide."""
+    from stable_worldmodel.wm.lewm.module import MLP, Embedder, Predictor
+
+    s, d = sizes, sizes["hidden"]
+    predictor = Predictor(
+        num_frames=s["history"], input_dim=d, hidden_dim=d, output_dim=d, depth=s["depth"], heads=s["heads"],
+        dim_head=s["dim_head"], mlp_dim=s["mlp"],
+    )  # fmt: skip
+
+    def projector() -> MLP:
+        return MLP(input_dim=d, output_dim=d, hidden_dim=s["proj_hidden"], norm_fn=torch.nn.BatchNorm1d)
+
+    return {
+        "encoder": tiny_vit(s),
+        "predictor": predictor,
+        "action_encoder": Embedder(input_dim=s["action_dim"], emb_dim=d),
+        "projector": projector(),
+        "pred_proj": projector(),
+    }
+
+
 def tensors(ref: np.lib.npyio.NpzFile, prefix: str, rename: Callable[[str], str] = str) -> dict[str, torch.Tensor]:
     """``{our name: tensor}`` of the reference entries ``prefix/<name>``."""
     return {rename(k[len(prefix) + 1 :]): torch.from_numpy(ref[k]) for k in ref.files if k.startswith(prefix + "/")}

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import torch
-from _objective import DATA, adamw_step, check_step, recorded, tensors, tiny_vit
+from _objective import DATA, adamw_step, check_step, jepa_parts, recorded, tensors
 
 pytest.importorskip("transformers")
 
@@ -22,21 +22,12 @@ def ours_key(key: str) -> str:
 
 
 def ours():
-    from stable_worldmodel.wm.lewm.module import MLP, Embedder, Predictor
+    from stable_worldmodel.wm.lewm.module import MLP
     from stable_worldmodel.wm.pldm import PLDM
 
     s, d = SIZES, SIZES["hidden"]
-    vit = tiny_vit(s)
-    predictor = Predictor(
-        num_frames=s["history"], input_dim=d, hidden_dim=d, output_dim=d, depth=s["depth"], heads=s["heads"],
-        dim_head=s["dim_head"], mlp_dim=s["mlp"],
-    )  # fmt: skip
     model = PLDM(
-        encoder=vit,
-        predictor=predictor,
-        action_encoder=Embedder(input_dim=s["action_dim"], emb_dim=d),
-        projector=MLP(input_dim=d, output_dim=d, hidden_dim=s["proj_hidden"], norm_fn=torch.nn.BatchNorm1d),
-        pred_proj=MLP(input_dim=d, output_dim=d, hidden_dim=s["proj_hidden"], norm_fn=torch.nn.BatchNorm1d),
+        **jepa_parts(s),
         idm=MLP(input_dim=2 * d, hidden_dim=s["idm_hidden"], output_dim=s["action_dim"]),
         num_preds=s["num_preds"],
         history_size=s["history"],
