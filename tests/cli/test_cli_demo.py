@@ -130,22 +130,22 @@ def test_a_second_demo_waits_for_the_first_recording(tmp_path):
     env = {**os.environ, "STABLEWM_HOME": str(home)}
     code = "from stable_worldmodel.cli import main; raise SystemExit(main())"
     args = [sys.executable, "-c", code, "demo", *TINY, "--out", str(tmp_path / "d")]
-    proc = subprocess.Popen(args, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    seen = []
+    proc = subprocess.Popen(args, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    seen = b""  # read from the descriptor itself: a buffered readline could hold the next lines where select won't see
     try:
         deadline = time.monotonic() + 120  # start-up may take long on a loaded machine
         while time.monotonic() < deadline and proc.poll() is None:
             if select.select([proc.stdout], [], [], 1.0)[0]:
-                seen.append(proc.stdout.readline())
-                if "Waiting for another swm demo recording" in seen[-1]:
+                seen += os.read(proc.stdout.fileno(), 65536)
+                if b"Waiting for another swm demo recording" in seen:
                     break
         time.sleep(0.5)
         assert proc.poll() is None and not (home / f"{DATASET}.h5").exists()  # waiting, nothing written
     finally:
         lock.release()
     out, _ = proc.communicate(timeout=120)
-    assert proc.returncode == 0, "".join(seen) + out
-    assert "Waiting for another swm demo recording" in "".join(seen)
+    assert proc.returncode == 0, (seen + out).decode(errors="replace")
+    assert "Waiting for another swm demo recording" in seen.decode(errors="replace")
 
 
 def test_demo_random_and_expert_share_seeds(swm, tmp_path):
