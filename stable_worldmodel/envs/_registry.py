@@ -189,38 +189,6 @@ BUILTIN: tuple[EnvEntry, ...] = (
         )
         for name in ("CraftaxPixels", "CraftaxSymbolic", "CraftaxClassicPixels", "CraftaxClassicSymbolic")
     ),
-    # upstream's Piecewise: no episode limit of its own, as upstream (swm tools cut at 100 steps)
-    EnvEntry(
-        "swm/Piecewise-v0",
-        f"{_P}.piecewise.piecewise_env:PiecewiseEnv",
-        ("continuous",),
-        f"{_P}.piecewise.expert:PiecewiseExpert",
-    ),
-    # Craftax (extra "craftax"): craftax's own time limits (100000 / Classic 10000 steps) truncate; the tools cut
-    # at 1000 steps; no expert (an open-ended game)
-    *(
-        EnvEntry(
-            f"swm/{name}-v1",
-            f"{_P}.craftax.craftax:{name}Wrapper",
-            ("discrete", "craftax"),
-            tool_steps=1000,
-        )
-        for name in ("CraftaxPixels", "CraftaxSymbolic", "CraftaxClassicPixels", "CraftaxClassicSymbolic")
-    ),
-    # PyFlyt's rocket landing (extra "pyflyt"): the env truncates after max_duration_seconds (30 s: 1200 steps)
-    EnvEntry(
-        "swm/PFRocketLanding-v0",
-        f"{_P}.rocket_landing.pyflyt_rocketlanding:RocketLandingEnv",
-        ("continuous", "pyflyt"),
-        f"{_P}.rocket_landing.expert:RocketLandingExpert",
-        tool_steps=1200,
-    ),
-    # Craftax (extra "craftax"): no scripted expert (an open-ended crafting game); the env truncates at
-    # craftax's time limit, the tools cut at 1000 steps
-    *(
-        EnvEntry(f"swm/{name}-v1", f"{_P}.craftax.craftax:{name}Wrapper", ("discrete", "craftax"), tool_steps=1000)
-        for name in ("CraftaxPixels", "CraftaxSymbolic", "CraftaxClassicPixels", "CraftaxClassicSymbolic")
-    ),
     # OGBench's locomotion mazes (extra "mujoco"): no TimeLimit of their own, as upstream; the tools cut at
     # OGBench's 1000 steps (point / ant mazes)
     EnvEntry(
