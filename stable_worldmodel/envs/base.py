@@ -93,6 +93,29 @@ def point_option(owner: str, options: Mapping[str, Any], key: str) -> np.ndarray
     return value[:2].copy()
 
 
+def reset_point_task(
+    env: Any, owner: str, seed: int | None, options: Mapping[str, Any], defaults: Any
+) -> tuple[np.ndarray, np.ndarray]:
+    """The reset of a point-agent task (TwoRoom-v1, Piecewise): resample ``env.variation_space`` (from
+    ``seed``, or, where upstream reseeds from fresh entropy, a seed drawn from ``env.np_random``) with
+    ``options`` and ``defaults`` (the factors resampled when the options name none), then return the agent's
+    and the target's positions, float32 ``(2,)``: reset options ``state`` and ``target_state`` /
+    ``goal_state`` where given, else the ``agent`` / ``target`` position factors."""
+    from .. import spaces
+
+    if seed is None:
+        seed = int(env.np_random.integers(0, 2**31 - 1))
+    spaces.reset_variation_space(env.variation_space, seed, options, defaults)
+    v = env.variation_space
+    agent = point_option(owner, options, keys.STATE)
+    target = point_option(owner, options, "target_state")
+    if target is None:
+        target = point_option(owner, options, keys.GOAL_STATE)
+    agent = v["agent"]["position"].value.astype(np.float32) if agent is None else agent
+    target = v["target"]["position"].value.astype(np.float32) if target is None else target
+    return agent, target
+
+
 def check_variation_option(options: Mapping[str, Any] | None, names: list[str] | None = None) -> list[str] | None:
     """The factor names of reset option ``"variation"`` as a list (None when absent or empty).
 

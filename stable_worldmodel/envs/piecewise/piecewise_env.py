@@ -52,7 +52,7 @@ import numpy as np
 
 from ... import keys, spaces
 from ...errors import ConfigError
-from ..base import DatasetResetMixin, check_render_size, point_option
+from ..base import DatasetResetMixin, check_render_size, reset_point_task
 from ..base import rgb_factor as _rgb
 from ..base import scalar_factor as _box1
 
@@ -177,17 +177,10 @@ class PiecewiseEnv(DatasetResetMixin, gym.Env):
     # -- gym API --------------------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         super().reset(seed=seed)
-        options = dict(options or {})
-        if seed is None:  # upstream reseeds from fresh entropy here: draw from the env's generator instead
-            seed = int(self.np_random.integers(0, 2**31 - 1))
-        spaces.reset_variation_space(self.variation_space, seed, options, DEFAULT_VARIATIONS)
-        v = self.variation_space
-        agent = point_option("PiecewiseEnv", options, keys.STATE)
-        target = point_option("PiecewiseEnv", options, "target_state")
-        if target is None:
-            target = point_option("PiecewiseEnv", options, keys.GOAL_STATE)
-        self.agent_position = v["agent"]["position"].value.astype(np.float32) if agent is None else agent
-        self.target_position = v["target"]["position"].value.astype(np.float32) if target is None else target
+        # upstream reseeds from fresh entropy when seed is None: reset_point_task draws from the env's generator
+        self.agent_position, self.target_position = reset_point_task(
+            self, "PiecewiseEnv", seed, dict(options or {}), DEFAULT_VARIATIONS
+        )
         self._static = None
         self._target_img = None
         return self._get_obs(), self._get_info()
