@@ -56,6 +56,7 @@ from __future__ import annotations
 import logging
 import os
 import weakref
+import zlib
 from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -147,6 +148,46 @@ def _write_rows(dset, start: int, rows: np.ndarray) -> None:
     did.write(h5py.h5s.create_simple(rows.shape), space, rows)
 
 
+def deflate_level(dset) -> int | None:
+    """The gzip level of a column stored one row per chunk with deflate as its only filter (the
+    images :func:`column_storage` makes), whose chunks :func:`_write_deflated` can write; else None."""
+    import h5py
+
+    if dset.chunks != (1, *dset.shape[1:]):
+        return None
+    plist = dset.id.get_create_plist()
+    if plist.get_nfilters() != 1:
+        return None
+    code, _, opts, _ = plist.get_filter(0)
+    return int(opts[0]) if code == h5py.h5z.FILTER_DEFLATE and opts else None
+
+
+def _deflate(rows: np.ndarray, level: int) -> list[bytes]:
+    """One zlib stream per row (the format of HDF5's deflate filter); a row equal to the row
+    before it (an episode's goal image) shares that row's bytes instead of being compressed again."""
+    flat = rows.reshape(len(rows), -1)
+    out: list[bytes] = []
+    for i, row in enumerate(flat):
+        out.append(out[-1] if i and np.array_equal(row, flat[i - 1]) else zlib.compress(row, level))
+    return out
+
+
+def _write_deflated(dset, start: int, rows: np.ndarray, level: int) -> None:
+    """:func:`_write_rows` for a :func:`deflate_level` column: the rows are compressed here and
+    their chunks handed to HDF5 as they are (``write_direct_chunk``), the bytes HDF5's own filter
+    would store, without its per-chunk overhead (see :func:`_deflate` for repeated rows)."""
+    rows = np.ascontiguousarray(rows)
+    chunks = _deflate(rows, level)
+    end = start + len(rows)
+    did = dset.id
+    shape = did.shape
+    if shape[0] < end:
+        did.set_extent((end, *shape[1:]))
+    zeros = (0,) * (len(shape) - 1)
+    for i, chunk in enumerate(chunks):
+        did.write_direct_chunk((start + i, *zeros), chunk)
+
+
 def _close(f, fileobj: _superblock.SealedFile) -> None:
     """HDF5 writes through ``fileobj`` while it closes, so the descriptor goes last."""
     if os.getpid() != fileobj.pid:  # a forked child exiting: the writer and its file are the parent's
@@ -208,6 +249,7 @@ class HDF5Writer:
         self.checksum = bool(checksum)
         self._summed: set[str] = set()  # columns whose rows get a checksum
         self._dsets: dict[str, Any] = {}  # the file's datasets by name, opened once SWMR writing started
+        self._levels: dict[str, int | None] = {}  # gzip level of the columns written chunk by chunk (deflate_level)
         self.num_rows = 0
         self.num_episodes = 0
         self.next_seed: int | None = None
@@ -444,10 +486,15 @@ class HDF5Writer:
         if not dsets:  # opened once, after SWMR writing started
             dsets.update((name, f[name]) for name in [*self._schema, keys.EP_LEN, keys.EP_OFFSET])
             dsets.update((_rowsum.companion(name), f[_rowsum.companion(name)]) for name in self._summed)
+            self._levels = {name: deflate_level(dsets[name]) for name in self._schema}
         for name, (_, dtype) in self._schema.items():
             try:
                 data = np.concatenate([np.asarray(ep[name]) for ep in episodes])
-                _write_rows(dsets[name], start, data)
+                level = self._levels[name]
+                if level is not None and data.dtype == dtype:
+                    _write_deflated(dsets[name], start, data, level)
+                else:
+                    _write_rows(dsets[name], start, data)
                 if name in self._summed:  # the checksums are of the rows as stored (HDF5 casts, saturating)
                     stored = data if data.dtype == dtype else dsets[name][start : start + total]
                     _write_rows(dsets[_rowsum.companion(name)], start, _rowsum.row_checksums(stored, start))

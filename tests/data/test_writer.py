@@ -435,3 +435,87 @@ def test_repair_clears_flags_left_by_an_older_writer(make_h5):
     assert not _superblock.repair(path)
     with h5py.File(path, "r") as f:
         assert f[keys.EP_LEN][:].tolist() == [2]
+
+
+def _episodes_with_a_goal(synth, lengths=(4, 3)) -> list[dict[str, np.ndarray]]:
+    """Synthetic episodes plus a ``goal`` image column that is constant within each episode."""
+    episodes = []
+    for ep, n in enumerate(lengths):
+        episode = synth(ep, n, IMAGE)
+        episode["goal"] = np.broadcast_to(episode[keys.PIXELS][-1], episode[keys.PIXELS].shape).copy()
+        episodes.append(episode)
+    return episodes
+
+
+def test_compressed_chunks_are_zlib_streams_of_their_rows(tmp_path, synth):
+    """Image rows are compressed by the writer and handed to HDF5 chunk by chunk: each chunk is
+    what HDF5's deflate filter stores (filter mask 0, a zlib stream of the row), and the file reads
+    back as one written through the filter does."""
+    import zlib
+
+    episodes = _episodes_with_a_goal(synth)
+    direct, filtered = tmp_path / "direct.h5", tmp_path / "filtered.h5"
+    with HDF5Writer(direct) as writer:
+        writer.write_episodes(episodes)
+    real = writer_module.deflate_level
+    writer_module.deflate_level = lambda dset: None  # HDF5's own filter writes every column
+    try:
+        with HDF5Writer(filtered) as writer:
+            writer.write_episodes(episodes)
+    finally:
+        writer_module.deflate_level = real
+    with h5py.File(direct, "r") as a, h5py.File(filtered, "r") as b:
+        for name in ("goal", keys.PIXELS):
+            dset = a[name]
+            assert writer_module.deflate_level(dset) == writer_module.GZIP_LEVEL
+            np.testing.assert_array_equal(dset[:], b[name][:])
+            for row in range(dset.shape[0]):
+                mask, chunk = dset.id.read_direct_chunk((row, 0, 0, 0))
+                assert mask == 0 and zlib.decompress(chunk) == dset[row].tobytes()
+
+
+def test_a_row_equal_to_the_one_before_is_compressed_once(tmp_path, synth, monkeypatch):
+    import zlib
+
+    calls, real = [], zlib.compress
+
+    def compress(data, level):
+        calls.append(level)
+        return real(data, level)
+
+    monkeypatch.setattr(writer_module.zlib, "compress", compress)
+    with HDF5Writer(tmp_path / "goal.h5") as writer:
+        writer.write_episodes(_episodes_with_a_goal(synth, lengths=(4, 3)))
+    # pixels: 7 different rows; goal: one run of 4 equal rows, one of 3
+    assert len(calls) == 7 + 2 and set(calls) == {writer_module.GZIP_LEVEL}
+    with h5py.File(tmp_path / "goal.h5", "r") as f:
+        assert (f["goal"][:4] == f[keys.PIXELS][3]).all() and (f["goal"][4:] == f[keys.PIXELS][6]).all()
+
+
+@pytest.mark.parametrize(
+    ("storage", "level"),
+    [
+        (dict(chunks=(1, 24, 24, 3), compression="gzip", compression_opts=9), 9),
+        (dict(chunks=(1, 24, 24, 3), compression="gzip", shuffle=True), None),  # two filters
+        (dict(chunks=(2, 24, 24, 3), compression="gzip"), None),  # two rows per chunk
+        (dict(chunks=(1, 24, 24, 3), compression="lzf"), None),
+        (dict(chunks=(1, 24, 24, 3)), None),
+    ],
+)
+def test_chunks_are_written_directly_only_for_one_row_gzip_columns(tmp_path, synth, storage, level):
+    """Columns of files made by other programs keep working: those that are not one deflated row
+    per chunk go through HDF5's filters, and every one reads back what was appended."""
+    path = tmp_path / "foreign.h5"
+    first = synth(0, 3, IMAGE)
+    with h5py.File(path, "w", libver="latest") as f:
+        for name, value in first.items():
+            opts = storage if name == keys.PIXELS else {}
+            f.create_dataset(name, data=value, maxshape=(None, *value.shape[1:]), **opts)
+        f.create_dataset(keys.EP_LEN, data=np.array([3], np.int32), maxshape=(None,))
+        f.create_dataset(keys.EP_OFFSET, data=np.array([0], np.int64), maxshape=(None,))
+    with HDF5Writer(path) as writer:
+        writer.write_episodes([synth(1, 4, IMAGE)])
+    with h5py.File(path, "r") as f:
+        assert writer_module.deflate_level(f[keys.PIXELS]) == level
+        np.testing.assert_array_equal(f[keys.PIXELS][3:], synth(1, 4, IMAGE)[keys.PIXELS])
+        np.testing.assert_array_equal(f[keys.PIXELS][:3], first[keys.PIXELS])

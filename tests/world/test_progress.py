@@ -22,6 +22,23 @@ def test_a_terminal_gets_a_bar_and_a_log_gets_lines(monkeypatch):
     assert progress(3, "x", enabled=False).disable  # verbose=0: silent either way
 
 
+def test_no_bar_drawn_imports_no_tqdm():
+    """tqdm (and the asyncio it pulls in) costs ~50 ms to import: paid only for a bar drawn."""
+    import subprocess
+
+    code = (
+        "import sys\n"
+        "from stable_worldmodel.world.progress import progress\n"
+        "with progress(3, 'x', enabled=False) as bar:\n"
+        "    bar.set_postfix_str('y'); bar.update(2)\n"
+        "assert bar.n == 2, bar.n\n"
+        "progress(3, 'x', enabled=True)  # stderr is a pipe here: lines, not a bar\n"
+        "print('tqdm' in sys.modules)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "False"
+
+
 @pytest.mark.parametrize("num_envs", [1, 3])
 def test_evaluation_and_recording_lines_outside_a_terminal(capsys, monkeypatch, tmp_path, num_envs):
     monkeypatch.setenv("STABLEWM_PROGRESS_SECONDS", "0")  # every update (default: every 30 s)
