@@ -50,11 +50,23 @@ def protocol_knobs(name: str, env: str) -> dict[str, Any]:
     return {**_UPSTREAM, **_UPSTREAM_ENVS.get(env, {})}
 
 
+#: the dataset column ``--min-goal-distance`` measures (the distance the envs' ``eval_state`` reports)
+DISTANCE_COLUMN = "state"
+
+
 def dataset_starts(
-    dataset: Any, episodes: int, goal_offset: int, seed: int, pool: Sequence[int] | None = None
+    dataset: Any,
+    episodes: int,
+    goal_offset: int,
+    seed: int,
+    pool: Sequence[int] | None = None,
+    min_distance: float | None = None,
 ) -> tuple[list[int], list[int]]:
     """``episodes`` (episode, start step) pairs with ``start + goal_offset < length``, drawn with
-    ``seed`` from ``pool`` (default: every episode), without repeating a pair while possible."""
+    ``seed`` from ``pool`` (default: every episode), without repeating a pair while possible.
+    ``min_distance``: only pairs whose goal row is at least that far from the start row (Euclidean
+    distance of their :data:`DISTANCE_COLUMN`, the distance TwoRoom's and Push-T's ``eval_state``
+    report), the harder variant where a random policy rarely succeeds."""
     lengths = np.asarray(dataset.lengths)
     pool = np.asarray(list(pool) if pool is not None else range(len(lengths)), dtype=np.int64)
     pool = pool[lengths[pool] > goal_offset]
@@ -65,6 +77,8 @@ def dataset_starts(
         )
     rng = np.random.default_rng(seed)
     pairs = [(int(e), s) for e in pool for s in range(int(lengths[e]) - goal_offset)]
+    if min_distance is not None:
+        pairs = _far_pairs(dataset, pairs, goal_offset, float(min_distance))
     pick = rng.permutation(len(pairs))
     if len(pick) < episodes:
         pick = np.concatenate([pick, rng.integers(0, len(pairs), episodes - len(pick))])
@@ -72,13 +86,40 @@ def dataset_starts(
     return [e for e, _ in chosen], [s for _, s in chosen]
 
 
+def _far_pairs(dataset: Any, pairs: list[tuple[int, int]], goal_offset: int, min_distance: float) -> list:
+    """The (episode, start) ``pairs`` whose goal row is at least ``min_distance`` from the start row."""
+    if DISTANCE_COLUMN not in dataset.column_names:
+        raise ConfigError(
+            f"swm eval --min-goal-distance requires a {DISTANCE_COLUMN!r} column in the dataset, got columns "
+            f"{sorted(dataset.column_names)}"
+        )
+    values = np.asarray(dataset.get_col_data(DISTANCE_COLUMN), np.float64).reshape(int(np.sum(dataset.lengths)), -1)
+    offsets = np.concatenate([[0], np.cumsum(dataset.lengths)[:-1]]).astype(np.int64)
+    rows = np.asarray([offsets[e] + s for e, s in pairs], np.int64)
+    far = np.linalg.norm(values[rows + goal_offset] - values[rows], axis=1) >= min_distance
+    if not far.any():
+        raise ConfigError(
+            f"swm eval --min-goal-distance requires goals at least {min_distance:g} from their start, got none "
+            f"among the goals {goal_offset} steps on (the farthest: "
+            f"{np.linalg.norm(values[rows + goal_offset] - values[rows], axis=1).max():.3g}); lower it"
+        )
+    return [pair for pair, keep in zip(pairs, far, strict=True) if keep]
+
+
 def _from_dataset(
-    world: Any, name: str, episodes: int, goal_offset: int, budget: int, seed: int, pool: Sequence[int] | None
+    world: Any,
+    name: str,
+    episodes: int,
+    goal_offset: int,
+    budget: int,
+    seed: int,
+    pool: Sequence[int] | None,
+    min_distance: float | None = None,
 ) -> dict:
     from ..data import HDF5Dataset
 
     dataset = HDF5Dataset(name, preload=False)
-    eps, starts = dataset_starts(dataset, episodes, goal_offset, seed, pool)
+    eps, starts = dataset_starts(dataset, episodes, goal_offset, seed, pool, min_distance)
     n = world.num_envs
     successes, steps = [], []
     for i in range(0, episodes, n):
@@ -119,6 +160,7 @@ def evaluate_cli(
     ray_address: str | None = None,
     held_out_of: str | None = None,
     protocol: str | None = None,
+    min_goal_distance: float | None = None,
 ) -> tuple[SuccessSummary, str, dict[str, Any]]:
     """Evaluate ``policy`` and return its summary, a table title and the JSON record (``ray``:
     the episodes spread over Ray tasks, see :func:`stable_worldmodel.world.on_ray.evaluate_on_ray`).
@@ -176,8 +218,9 @@ def evaluate_cli(
             pol = make_policy(policy, env, seed=seed, plan=plan, device=device)
             world.set_policy(pol)
             pool, held_out = _start_pool(policy, from_dataset, held_out_of, protocol)
-            results = _from_dataset(world, from_dataset, episodes, goal_offset, budget, seed, pool)
-            title = f"{env}: {episodes} starts from {from_dataset} (goal +{goal_offset} steps, budget {budget})"
+            results = _from_dataset(world, from_dataset, episodes, goal_offset, budget, seed, pool, min_goal_distance)
+            far = f", at least {min_goal_distance:g} away" if min_goal_distance is not None else ""
+            title = f"{env}: {episodes} starts from {from_dataset} (goal +{goal_offset} steps{far}, budget {budget})"
             record.update(
                 protocol="dataset",
                 dataset=from_dataset,
@@ -190,6 +233,8 @@ def evaluate_cli(
             )
             if protocol is not None:
                 record["protocol_name"] = protocol
+            if min_goal_distance is not None:
+                record["min_goal_distance"] = min_goal_distance
         else:
             results = evaluate_policy(world, policy, episodes, seed, variation, plan=plan, device=device)
             title = f"{env}: seeds {seed}..{seed + episodes - 1}, at most {max_steps} steps"

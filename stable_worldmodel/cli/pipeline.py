@@ -410,6 +410,19 @@ def eval_cmd(
             "--budget", parser=int_in(1), metavar="N", help="With --from-dataset: steps allowed to reach the goal."
         ),
     ] = 50,
+    min_goal_distance: Annotated[
+        float | None,
+        typer.Option(
+            "--min-goal-distance",
+            metavar="D",
+            min=0.0,
+            help=(
+                "With --from-dataset: only starts whose goal is at least D from them (distance of the dataset's "
+                "state rows, the one the env's eval_state reports): a harder variant where random rarely succeeds."
+            ),
+            show_default=False,
+        ),
+    ] = None,
     decoder: Annotated[
         str | None,
         typer.Option(
@@ -504,6 +517,8 @@ def eval_cmd(
         iterations, cost = chosen.get("iterations", iterations), chosen.get("cost", cost)
         subgoals, goal_offset = chosen.get("subgoals", subgoals), chosen.get("goal_offset", goal_offset)
         budget = chosen.get("budget", budget)
+    if min_goal_distance is not None and from_dataset is None:
+        raise typer.BadParameter("requires --from-dataset NAME", param_hint="--min-goal-distance")
     if held_out_of is not None and from_dataset is None:
         raise typer.BadParameter("requires --from-dataset NAME", param_hint="--held-out-of")
     if (ray or ray_address) and (video is not None or from_dataset is not None):
@@ -590,6 +605,7 @@ def eval_cmd(
         ray_address=ray_address,
         held_out_of=held_out_of,
         protocol=protocol,
+        min_goal_distance=min_goal_distance,
     )
     out.print(success_table(title, [summary]))
     if record.get("videos"):

@@ -353,6 +353,46 @@ def test_dataset_starts_are_seeded_valid_and_distinct_while_possible():
         dataset_starts(data, 2, goal_offset=8, seed=0)
 
 
+def test_min_goal_distance_keeps_only_far_goals():
+    """``--min-goal-distance D``: pairs whose goal's ``state`` row is at least D from the start's."""
+    from stable_worldmodel.cli.evaluation import dataset_starts
+
+    # two episodes of 6 rows; the state moves 1 per step in episode 0 and 3 per step in episode 1
+    state = np.concatenate([np.arange(6.0), 100 + 3 * np.arange(6.0)])[:, None] * np.array([[0.6, 0.8]])
+    data = SimpleNamespace(
+        lengths=np.array([6, 6]), column_names=["state", "action"], get_col_data=lambda col: {"state": state}[col]
+    )
+    eps, starts = dataset_starts(data, 6, goal_offset=2, seed=0, min_distance=5.0)
+    assert set(eps) == {1} and len(set(starts)) == 4  # episode 1's goals are 6 away, episode 0's 2
+    eps, _ = dataset_starts(data, 6, goal_offset=2, seed=0, min_distance=2.0)
+    assert set(eps) == {0, 1}
+    with pytest.raises(ConfigError, match=r"at least 7 from their start, got none among .*farthest: 6\)"):
+        dataset_starts(data, 2, goal_offset=2, seed=0, min_distance=7.0)
+    bare = SimpleNamespace(lengths=np.array([6]), column_names=["action"])
+    with pytest.raises(ConfigError, match="requires a 'state' column"):
+        dataset_starts(bare, 2, goal_offset=2, seed=0, min_distance=1.0)
+
+
+def test_eval_min_goal_distance_is_recorded_and_narrows_the_starts(swm, home, tmp_path):
+    runs = {}
+    for name, extra in (("all", ()), ("far", ("--min-goal-distance", "0.03"))):
+        out = tmp_path / f"{name}.json"
+        result = swm("eval", TOY, "--episodes", "12", "--image-size", "16", "--from-dataset", "toy",
+                     "--goal-offset", "1", "--budget", "2", "--json", str(out), *extra)  # fmt: skip
+        assert result.exit_code == 0, result.output
+        runs[name] = json.loads(out.read_text())
+    assert "min_goal_distance" not in runs["all"] and runs["far"]["min_goal_distance"] == 0.03
+    from stable_worldmodel.data import HDF5Dataset
+
+    data = HDF5Dataset("toy", cache_dir=home, preload=False)
+    state = np.asarray(data.get_col_data("state"), np.float64).reshape(int(np.sum(data.lengths)), -1)
+    first = np.concatenate([[0], np.cumsum(data.lengths)[:-1]])
+    rows = first[runs["far"]["episodes_idx"]] + np.asarray(runs["far"]["start_steps"])
+    assert (np.linalg.norm(state[rows + 1] - state[rows], axis=1) >= 0.03).all()
+    result = swm("eval", TOY, "--image-size", "16", "--episodes", "1", "--min-goal-distance", "1")
+    assert result.exit_code == 2 and "--min-goal-distance: requires --from-dataset NAME" in result.output
+
+
 # -- the generalization report ---------------------------------------------------------------
 def test_fov_sweep_reports_each_factor_for_expert_random_and_a_learned_model(swm, home, tmp_path):
     out = tmp_path / "sweep.json"
