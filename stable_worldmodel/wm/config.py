@@ -188,12 +188,15 @@ class JEPAConfig(ImageEncoderConfig, PredictorConfig):
         "state_key": "encoder=state: the column (and info key) the model observes, e.g. state or proprio.",
         "state_dim": "encoder=state: numbers in that column (its width).",
         "state_width": "encoder=state: hidden width of the state encoder's MLP.",
+        "state_dims": "encoder=state: the entries of that column the model reads, e.g. [0,1,2,3,4] (Push-T's poses "
+        "without the agent's velocity; default: all).",
     }
 
     projector_hidden: int = 256
     state_key: str = keys.STATE
     state_dim: int = 0
     state_width: int = 256
+    state_dims: list[int] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -206,6 +209,16 @@ class JEPAConfig(ImageEncoderConfig, PredictorConfig):
                 f"{name} with encoder='state' requires state_dim > 0 (the width of the dataset column it reads) and "
                 f"state_key a numeric column other than pixels and action, got state_dim={self.state_dim}, "
                 f"state_key={self.state_key!r}; e.g. --set encoder=state --set state_dim=7 (swm/PushT-v1's state)"
+            )
+        dims = self.state_dims
+        if (
+            not isinstance(dims, (list, tuple))
+            or any(isinstance(d, bool) or not isinstance(d, int) or not 0 <= d < max(self.state_dim, 1) for d in dims)
+            or len(set(dims)) != len(dims)
+        ):
+            raise ConfigError(
+                f"{name} requires state_dims to be distinct entries of the state_dim={self.state_dim} column "
+                f"(0..{self.state_dim - 1}), got {dims!r}; e.g. --set state_dims=[0,1,2,3,4]"
             )
 
     @property
@@ -230,6 +243,7 @@ class JEPAConfig(ImageEncoderConfig, PredictorConfig):
                 "input_dim": self.state_dim,
                 "hidden_size": self.encoder_dim,
                 "width": self.state_width,
+                **({"dims": list(self.state_dims)} if self.state_dims else {}),
             }
         return super().encoder_tree()
 

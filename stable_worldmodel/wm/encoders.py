@@ -9,6 +9,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from types import SimpleNamespace
 from typing import Any
@@ -115,16 +116,29 @@ class ConvEncoder(nn.Module):
 class StateEncoder(nn.Module):
     """MLP over a state vector: ``(N, input_dim) -> last_hidden_state (N, 1, hidden_size)``, the
     encoder of a JEPA that reads a dataset column (``state``, ``proprio``) instead of pixels.
-    Linear, LayerNorm, GELU, Linear; ``config.hidden_size`` as a ViT's config."""
+    Linear, LayerNorm, GELU, Linear; ``config.hidden_size`` as a ViT's config.
 
-    def __init__(self, input_dim: int, hidden_size: int = 64, width: int = 256):
+    ``dims``: the entries of the vector it reads (default: all ``input_dim``), e.g. the poses of
+    Push-T's state without the agent's velocity; the others do not reach the embedding, so the
+    planner's latent distance ignores them."""
+
+    def __init__(self, input_dim: int, hidden_size: int = 64, width: int = 256, dims: Sequence[int] | None = None):
         super().__init__()
         for name, value in (("input_dim", input_dim), ("hidden_size", hidden_size), ("width", width)):
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ConfigError(f"StateEncoder requires {name} to be a positive int, got {value!r}")
-        self.config = SimpleNamespace(input_dim=input_dim, hidden_size=hidden_size, width=width)
+        dims = list(range(input_dim)) if dims is None or len(dims) == 0 else list(dims)
+        bad = [d for d in dims if isinstance(d, bool) or not isinstance(d, int) or not 0 <= d < input_dim]
+        if bad or len(set(dims)) != len(dims):
+            raise ConfigError(
+                f"StateEncoder requires dims to be distinct entries of its {input_dim}-number input "
+                f"(0..{input_dim - 1}), got {dims!r}"
+            )
+        self.config = SimpleNamespace(input_dim=input_dim, hidden_size=hidden_size, width=width, dims=dims)
+        self._all = dims == list(range(input_dim))
+        self.register_buffer("_dims", torch.tensor(dims, dtype=torch.long), persistent=False)
         self.net = nn.Sequential(
-            nn.Linear(input_dim, width), nn.LayerNorm(width), nn.GELU(), nn.Linear(width, hidden_size)
+            nn.Linear(len(dims), width), nn.LayerNorm(width), nn.GELU(), nn.Linear(width, hidden_size)
         )
 
     def forward(self, state: torch.Tensor, **kwargs: Any) -> EncoderOutput:
@@ -132,4 +146,4 @@ class StateEncoder(nn.Module):
             raise SpaceError(
                 f"StateEncoder requires states of shape (N, {self.config.input_dim}), got {tuple(state.shape)}"
             )
-        return EncoderOutput(self.net(state).unsqueeze(1))
+        return EncoderOutput(self.net(state if self._all else state.index_select(1, self._dims)).unsqueeze(1))

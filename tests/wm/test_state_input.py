@@ -41,6 +41,36 @@ def test_bad_state_configs_are_typed_errors(overrides, needle):
         state_config("lewm", **overrides)
 
 
+@pytest.mark.parametrize(
+    ("dims", "needle"),
+    [([0, 2], r"\(0..1\), got \[0, 2\]"), ([1, 1], "distinct"), ("01", "distinct"), ([True], "distinct")],
+)
+def test_bad_state_dims_are_typed_errors(dims, needle):
+    with pytest.raises(ConfigError, match=needle):
+        state_config("lewm", state_dims=dims)
+
+
+@pytest.mark.parametrize("name", ["lewm", "pldm"])
+def test_state_dims_leave_the_other_entries_out_of_the_embedding(name, tmp_path):
+    """``state_dims=[1]``: the embedding, hence the planner's distance, ignores entry 0 (Push-T's poses without the
+    agent's velocity); the checkpoint keeps the selection."""
+    from stable_worldmodel.wm.utils import load_pretrained, save_pretrained
+
+    torch.manual_seed(0)
+    cfg = state_config(name, state_dims=[1])
+    assert cfg.encoder_tree()["dims"] == [1] and "dims" not in state_config(name).encoder_tree()
+    model = wm.make(name, action_dim=2, preset="tiny", **STATE, **(LEWM if name == "lewm" else {}), state_dims=[1])
+    model.eval()
+    state = torch.randn(3, 1, 2)
+    moved = state + torch.tensor([5.0, 0.0])
+    assert torch.equal(model.encode_obs(state), model.encode_obs(moved))
+    assert not torch.allclose(model.encode_obs(state), model.encode_obs(state + torch.tensor([0.0, 5.0])))
+    folder = save_pretrained(model, "dims", config=cfg.target_tree(2), cache_dir=tmp_path).parent
+    again = load_pretrained(folder).eval()
+    assert again.encoder.config.dims == [1]
+    assert torch.equal(again.encode_obs(state), model.encode_obs(state))
+
+
 @pytest.mark.parametrize("name", ["lewm", "pldm"])
 def test_a_state_model_encodes_and_plans_toward_the_goal_state(name):
     torch.manual_seed(0)
