@@ -146,4 +146,5 @@ class StateEncoder(nn.Module):
             raise SpaceError(
                 f"StateEncoder requires states of shape (N, {self.config.input_dim}), got {tuple(state.shape)}"
             )
-        return EncoderOutput(self.net(state if self._all else state.index_select(1, self._dims)).unsqueeze(1))
+        picked = state if getattr(self, "_all", True) else state.index_select(1, self._dims)  # pickled before dims: all
+        return EncoderOutput(self.net(picked).unsqueeze(1))
