@@ -42,8 +42,8 @@ def main() -> int:
     from stable_worldmodel.cli.evaluation import DEFAULT_SPLIT, dataset_starts
     from stable_worldmodel.cli.stats import SuccessSummary
     from stable_worldmodel.data import HDF5Dataset
-    from stable_worldmodel.envs.pusht.physics import K_P, K_V, body_state
-    from stable_worldmodel.envs.pusht.v1 import _DT, _SUBSTEPS, PushTV1
+    from stable_worldmodel.envs.pusht.physics import body_state
+    from stable_worldmodel.envs.pusht.v1 import PushTV1
     from stable_worldmodel.train.data import split_episodes
 
     dataset = HDF5Dataset(args.dataset, preload=False)
@@ -67,15 +67,9 @@ def main() -> int:
         a.position, a.velocity, b.position, b.velocity, b.angle, b.angular_velocity = s
 
     def simulate(actions: np.ndarray) -> np.ndarray:  # PushTV1.step's physics, without observations
-        agent, step = env.agent, env.space.step
         for ax, ay in actions * env.action_scale:
-            px, py = agent.position
-            tx, ty = px + ax, py + ay
-            for _ in range(_SUBSTEPS):
-                px, py = agent.position
-                vx, vy = agent.velocity
-                agent.velocity = (vx + (K_P * (tx - px) - K_V * vx) * _DT, vy + (K_P * (ty - py) - K_V * vy) * _DT)
-                step(_DT)
+            px, py = env.agent.position
+            env._drive(px + ax, py + ay)
         return body_state(env.agent, env.block)
 
     def cost(goal: np.ndarray, s: np.ndarray) -> float:

@@ -96,12 +96,12 @@ def _far_pairs(dataset: Any, pairs: list[tuple[int, int]], goal_offset: int, min
     values = np.asarray(dataset.get_col_data(DISTANCE_COLUMN), np.float64).reshape(int(np.sum(dataset.lengths)), -1)
     offsets = np.concatenate([[0], np.cumsum(dataset.lengths)[:-1]]).astype(np.int64)
     rows = np.asarray([offsets[e] + s for e, s in pairs], np.int64)
-    far = np.linalg.norm(values[rows + goal_offset] - values[rows], axis=1) >= min_distance
+    distance = np.linalg.norm(values[rows + goal_offset] - values[rows], axis=1)
+    far = distance >= min_distance
     if not far.any():
         raise ConfigError(
             f"swm eval --min-goal-distance requires goals at least {min_distance:g} from their start, got none "
-            f"among the goals {goal_offset} steps on (the farthest: "
-            f"{np.linalg.norm(values[rows + goal_offset] - values[rows], axis=1).max():.3g}); lower it"
+            f"among the goals {goal_offset} steps on (the farthest: {distance.max():.3g}); lower it"
         )
     return [pair for pair, keep in zip(pairs, far, strict=True) if keep]
 

@@ -227,6 +227,14 @@ class PushTV1(PushT):
         else:
             tx, ty = move[0], move[1]
         self._contact_points = 0
+        self._drive(tx, ty)
+        self._n_contacts = -(-self._contact_points // _SUBSTEPS)
+        self._state = body_state(self.agent, self.block)
+        success, dist = self.eval_state(self._goal_state, self._state)
+        return self._obs(), -dist, success, False, self._info()
+
+    def _drive(self, tx, ty) -> None:
+        """One control step of physics: the PD controller pulls the agent towards ``(tx, ty)``."""
         agent, step = self.agent, self.space.step
         for _ in range(_SUBSTEPS):
             px, py = agent.position
@@ -236,10 +244,6 @@ class PushTV1(PushT):
                 vy + (K_P * (ty - py) + K_V * (0.0 - vy)) * _DT,
             )
             step(_DT)
-        self._n_contacts = -(-self._contact_points // _SUBSTEPS)
-        self._state = body_state(self.agent, self.block)
-        success, dist = self.eval_state(self._goal_state, self._state)
-        return self._obs(), -dist, success, False, self._info()
 
     def eval_state(self, goal_state: np.ndarray, cur_state: np.ndarray):
         """``(success, ||goal - state||)`` over the 7 numbers; works on ``(..., 7)`` arrays too."""
