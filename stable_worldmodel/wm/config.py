@@ -185,6 +185,8 @@ class JEPAConfig(ImageEncoderConfig, PredictorConfig):
         "projector_hidden": "Hidden width of the projector heads (0: no projectors; the encoder width must be D).",
         "encoder": "Encoder trained with the model: cnn (a strided CNN), vit (a ViT from scratch) or state (an MLP "
         "over the dataset column state_key instead of the pixels).",
+        "rollout_steps": "K > 0 adds to the loss the error of K open-loop predictions, each fed back as context as "
+        "planning does (samples get history_size + K frames; 0: upstream's teacher-forced objective).",
         "state_key": "encoder=state: the column (and info key) the model observes, e.g. state or proprio.",
         "state_dim": "encoder=state: numbers in that column (its width).",
         "state_width": "encoder=state: hidden width of the state encoder's MLP.",
@@ -193,6 +195,7 @@ class JEPAConfig(ImageEncoderConfig, PredictorConfig):
     }
 
     projector_hidden: int = 256
+    rollout_steps: int = 0
     state_key: str = keys.STATE
     state_dim: int = 0
     state_width: int = 256
@@ -202,6 +205,7 @@ class JEPAConfig(ImageEncoderConfig, PredictorConfig):
         super().__post_init__()
         name = type(self).__name__
         check_positive_int(name, "projector_hidden", self.projector_hidden, minimum=0)
+        check_positive_int(name, "rollout_steps", self.rollout_steps, minimum=0)
         check_positive_int(name, "state_width", self.state_width)
         check_positive_int(name, "state_dim", self.state_dim, minimum=0)
         if self.encoder == "state" and (not self.state_dim or self.state_key in (keys.PIXELS, keys.ACTION)):
@@ -220,6 +224,11 @@ class JEPAConfig(ImageEncoderConfig, PredictorConfig):
                 f"{name} requires state_dims to be distinct entries of the state_dim={self.state_dim} column "
                 f"(0..{self.state_dim - 1}), got {dims!r}; e.g. --set state_dims=[0,1,2,3,4]"
             )
+
+    @property
+    def num_steps(self) -> int:
+        """Frames per training sample: ``history_size + max(num_preds, rollout_steps)``."""
+        return self.history_size + max(self.num_preds, self.rollout_steps)
 
     @property
     def extra_columns(self) -> dict[str, int]:
@@ -287,6 +296,8 @@ class JEPAConfig(ImageEncoderConfig, PredictorConfig):
     def model_kwargs(self, action_dim: int) -> dict[str, Any]:
         """Extra keyword arguments of the model class (training knobs; the observed key of a state-input model)."""
         kwargs: dict[str, Any] = {"num_preds": self.num_preds, "history_size": self.history_size}
+        if self.rollout_steps:  # absent by default: the config a checkpoint keeps stays upstream's
+            kwargs["rollout_steps"] = self.rollout_steps
         if self.encoder == "state":
             kwargs["obs_key"] = self.state_key
         return kwargs

@@ -217,25 +217,47 @@ class JEPA(nn.Module):
         return self.criterion(info)
 
     # -- training -------------------------------------------------------------------------------
-    def _teacher_forcing(self, batch: dict, history: int | None, num_preds: int) -> tuple[dict, torch.Tensor]:
+    def _teacher_forcing(
+        self, batch: dict, history: int | None, num_preds: int, rollout_steps: int = 0
+    ) -> tuple[dict, torch.Tensor]:
         """Encode ``batch`` (``pixels (B, T, C, h, w)``, ``action (B, T, A)``) and predict the
-        frames ``num_preds`` ahead of the first ``history`` ones; returns (encoded, pred_loss)."""
-        obs = _require(batch, self.obs_key, f"{type(self).__name__}.loss")
-        action = torch.nan_to_num(_require(batch, keys.ACTION, f"{type(self).__name__}.loss"), 0.0)
+        frames ``num_preds`` ahead of the first ``history`` ones; returns (encoded, pred_loss).
+
+        With ``rollout_steps = K > 0`` also ``out["rollout_loss"]``: the predictor rolled out
+        open loop from the first ``history`` embeddings over the next K actions, as planning
+        rolls it out (each prediction fed back as context, a window of ``history`` frames), and
+        the mean squared error of its K predictions to the embeddings of frames
+        ``history .. history + K - 1``."""
+        who = f"{type(self).__name__}.loss"
+        obs = _require(batch, self.obs_key, who)
+        action = torch.nan_to_num(_require(batch, keys.ACTION, who), 0.0)
         total = obs.shape[1]
-        history = int(history or min(self.history_size, total - num_preds))
-        if history < 1 or history + num_preds > total:
+        history = int(history or min(self.history_size, total - max(num_preds, rollout_steps)))
+        if history < 1 or history + max(num_preds, rollout_steps) > total:
             raise ConfigError(
-                f"{type(self).__name__}.loss requires history + num_preds <= frames per sample, got history={history}, "
-                f"num_preds={num_preds} and {total} frames"
+                f"{who} requires history + max(num_preds, rollout_steps) <= frames per sample, got "
+                f"history={history}, num_preds={num_preds}, rollout_steps={rollout_steps} and {total} frames"
             )
         out = self.encode({self.obs_key: obs, keys.ACTION: action})
         emb, act_emb = out[EMB], out[ACT_EMB]
         pred = self.predict(emb[:, :history], act_emb[:, :history])
         target = emb[:, num_preds : num_preds + history]
         out["pred_loss"] = (pred - target).square().mean()
+        if rollout_steps > 0:
+            out["rollout_loss"] = self._rollout_error(emb, act_emb, history, rollout_steps)
         out[keys.ACTION] = action
         return out, out["pred_loss"]
+
+    def _rollout_error(self, emb: torch.Tensor, act_emb: torch.Tensor, history: int, steps: int) -> torch.Tensor:
+        """Mean squared error of an open-loop rollout of ``steps`` predictions from ``emb[:, :history]``."""
+        frames = list(emb[:, :history].unbind(1))
+        errors = []
+        for k in range(history, history + steps):
+            lo = k - history
+            nxt = self._predict_last(torch.stack(frames[lo:k], 1), act_emb[:, lo:k])
+            errors.append((nxt - emb[:, k]).square().mean())
+            frames.append(nxt)
+        return torch.stack(errors).mean()
 
     def loss(self, batch: dict) -> dict:  # pragma: no cover - abstract
         raise NotImplementedError("loss(batch) -> {'loss': scalar, ...named terms}")

@@ -35,6 +35,8 @@ class PLDM(JEPA):
     default None: no inverse-dynamics term and no extra keys) is the inverse dynamics model,
     ``(N, 2 D) -> (N, A)``: it predicts the action block between two consecutive embeddings
     (``cat(z[t+1], z[t])``). ``loss_weights`` overrides :data:`DEFAULT_LOSS_WEIGHTS`.
+    ``rollout_steps`` (keyword, 0: upstream's objective) K > 0 adds ``rollout_loss`` with weight 1:
+    the error of K open-loop predictions as planning makes them (see ``JEPA._teacher_forcing``).
     """
 
     def __init__(
@@ -48,6 +50,7 @@ class PLDM(JEPA):
         *,
         num_preds: int = 1,
         history_size: int | None = None,
+        rollout_steps: int = 0,
         loss_weights: Mapping[str, float] | None = None,
         **kwargs: Any,
     ):
@@ -60,12 +63,13 @@ class PLDM(JEPA):
                 f"PLDM requires loss_weights keys among {sorted(DEFAULT_LOSS_WEIGHTS)}, got {sorted(unknown)}"
             )
         self.loss_weights = {**DEFAULT_LOSS_WEIGHTS, **dict(loss_weights or {})}
-        self.num_preds, self.loss_history = int(num_preds), history_size
+        self.num_preds, self.loss_history, self.rollout_steps = int(num_preds), history_size, int(rollout_steps)
         self.pldm_loss = _Unregistered(PLDMLoss())
         self.straightening = _Unregistered(TemporalStraighteningLoss())
 
     def loss(self, batch: dict) -> dict:
-        out, pred_loss = self._teacher_forcing(batch, self.loss_history, self.num_preds)
+        rollout = getattr(self, "rollout_steps", 0)  # a PLDM pickled by upstream has none
+        out, pred_loss = self._teacher_forcing(batch, self.loss_history, self.num_preds, rollout)
         emb, action = out["emb"], out["action"]
         a_pred = a_target = None
         if getattr(self, "idm", None) is not None:
@@ -75,7 +79,9 @@ class PLDM(JEPA):
         terms = {"pred_loss": pred_loss, **self.pldm_loss.module(emb, a_pred, a_target)}
         if emb.shape[1] >= 3:
             terms["temp_straight_loss"] = self.straightening.module(emb)
-        total = pred_loss
+        if "rollout_loss" in out:
+            terms["rollout_loss"] = out["rollout_loss"]
+        total = pred_loss + out.get("rollout_loss", 0.0)
         for name, weight in self.loss_weights.items():
             if name in terms:  # a zero weight too, as upstream's recipe adds every enabled term (its modules then
                 total = total + weight * terms[name]  # get zero gradients, which AdamW's weight decay still acts on)
