@@ -185,8 +185,8 @@ class JEPAConfig(ImageEncoderConfig, PredictorConfig):
         "projector_hidden": "Hidden width of the projector heads (0: no projectors; the encoder width must be D).",
         "encoder": "Encoder trained with the model: cnn (a strided CNN), vit (a ViT from scratch) or state (an MLP "
         "over the dataset column state_key instead of the pixels).",
-        "rollout_steps": "K > 0 adds to the loss the error of K open-loop predictions, each fed back as context as "
-        "planning does (samples get history_size + K frames; 0: upstream's teacher-forced objective).",
+        "rollout_steps": "K > 0 adds to the loss the error of K open-loop predictions from one frame, each fed back "
+        "as context as planning does (samples get at least 1 + K frames; 0: upstream's teacher-forced objective).",
         "state_key": "encoder=state: the column (and info key) the model observes, e.g. state or proprio.",
         "state_dim": "encoder=state: numbers in that column (its width).",
         "state_width": "encoder=state: hidden width of the state encoder's MLP.",
@@ -227,8 +227,8 @@ class JEPAConfig(ImageEncoderConfig, PredictorConfig):
 
     @property
     def num_steps(self) -> int:
-        """Frames per training sample: ``history_size + max(num_preds, rollout_steps)``."""
-        return self.history_size + max(self.num_preds, self.rollout_steps)
+        """Frames per training sample: ``history_size + num_preds``, or ``1 + rollout_steps`` when more."""
+        return max(self.history_size + self.num_preds, 1 + self.rollout_steps)
 
     @property
     def extra_columns(self) -> dict[str, int]:

@@ -224,18 +224,18 @@ class JEPA(nn.Module):
         frames ``num_preds`` ahead of the first ``history`` ones; returns (encoded, pred_loss).
 
         With ``rollout_steps = K > 0`` also ``out["rollout_loss"]``: the predictor rolled out
-        open loop from the first ``history`` embeddings over the next K actions, as planning
-        rolls it out (each prediction fed back as context, a window of ``history`` frames), and
-        the mean squared error of its K predictions to the embeddings of frames
-        ``history .. history + K - 1``."""
+        open loop from the first frame over the next K actions, as planning rolls it out (one
+        context frame; each prediction fed back as context, in a window of at most ``history``
+        frames), and the mean squared error of its K predictions to the embeddings of frames
+        ``1 .. K``."""
         who = f"{type(self).__name__}.loss"
         obs = _require(batch, self.obs_key, who)
         action = torch.nan_to_num(_require(batch, keys.ACTION, who), 0.0)
         total = obs.shape[1]
-        history = int(history or min(self.history_size, total - max(num_preds, rollout_steps)))
-        if history < 1 or history + max(num_preds, rollout_steps) > total:
+        history = int(history or min(self.history_size, total - num_preds))
+        if history < 1 or history + num_preds > total or rollout_steps + 1 > total:
             raise ConfigError(
-                f"{who} requires history + max(num_preds, rollout_steps) <= frames per sample, got "
+                f"{who} requires history + num_preds and 1 + rollout_steps <= frames per sample, got "
                 f"history={history}, num_preds={num_preds}, rollout_steps={rollout_steps} and {total} frames"
             )
         out = self.encode({self.obs_key: obs, keys.ACTION: action})
@@ -248,12 +248,12 @@ class JEPA(nn.Module):
         out[keys.ACTION] = action
         return out, out["pred_loss"]
 
-    def _rollout_error(self, emb: torch.Tensor, act_emb: torch.Tensor, history: int, steps: int) -> torch.Tensor:
-        """Mean squared error of an open-loop rollout of ``steps`` predictions from ``emb[:, :history]``."""
-        frames = list(emb[:, :history].unbind(1))
+    def _rollout_error(self, emb: torch.Tensor, act_emb: torch.Tensor, window: int, steps: int) -> torch.Tensor:
+        """Mean squared error of ``steps`` open-loop predictions from ``emb[:, 0]`` (contexts of at most ``window``)."""
+        frames = [emb[:, 0]]
         errors = []
-        for k in range(history, history + steps):
-            lo = k - history
+        for k in range(1, steps + 1):
+            lo = max(0, k - window)
             nxt = self._predict_last(torch.stack(frames[lo:k], 1), act_emb[:, lo:k])
             errors.append((nxt - emb[:, k]).square().mean())
             frames.append(nxt)
