@@ -1,6 +1,7 @@
 """Every model on upstream's Push-T protocol, side by side with the random floor on the same starts.
 
-Usage: python bench/bench_models_pusht.py [--models lewm pldm gcbc lewm-state pldm-state] [--episodes 1000]
+Usage: python bench/bench_models_pusht.py [--models lewm pldm gcbc lewm-state lewm-state-ro pldm-state]
+       [--episodes 1000]
        [--steps N] [--num-envs 10] [--harder G] [--set KEY=VALUE ...] [--keep]
 
 What it runs, as a user would (the printed commands are the ones executed):
@@ -39,6 +40,9 @@ EXTRA = {"gcbc": ["--set", "proprio_dim=4"], "gcivl": ["--set", "proprio_dim=4"]
 POSES = ["--set", "encoder=state", "--set", "state_dim=7", "--set", "state_dims=[0,1,2,3,4]",
          "--set", "history_size=3", "--set", "embed_dim=128"]  # fmt: skip
 EXTRA.update({"lewm-state": [*POSES, "--set", "sigreg_weight=0.09"], "pldm-state": POSES})
+#: ``lewm-state-ro``: the same, trained also on the error of 5 open-loop predictions (``rollout_steps``: the
+#: horizon CEM plans over)
+EXTRA["lewm-state-ro"] = [*EXTRA["lewm-state"], "--set", "rollout_steps=5"]
 
 
 def swm(*args: str) -> float:
@@ -87,7 +91,7 @@ def main() -> None:
     for model in args.models:
         train = [
             "train",
-            model.removesuffix("-state"),
+            model.split("-")[0],  # lewm-state-ro -> lewm
             "--dataset",
             DATASET,
             "--preset",
