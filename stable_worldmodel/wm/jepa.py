@@ -227,7 +227,9 @@ class JEPA(nn.Module):
         open loop from the first frame over the next K actions, as planning rolls it out (one
         context frame; each prediction fed back as context, in a window of at most ``history``
         frames), and the mean squared error of its K predictions to the embeddings of frames
-        ``1 .. K``."""
+        ``1 .. K``. Its gradient reaches the predictor and the action encoder only: the embeddings
+        enter it detached (through them the encoder would shrink what is hard to predict several
+        steps ahead; on Push-T, the pushed block, which planning must see)."""
         who = f"{type(self).__name__}.loss"
         obs = _require(batch, self.obs_key, who)
         action = torch.nan_to_num(_require(batch, keys.ACTION, who), 0.0)
@@ -250,6 +252,7 @@ class JEPA(nn.Module):
 
     def _rollout_error(self, emb: torch.Tensor, act_emb: torch.Tensor, window: int, steps: int) -> torch.Tensor:
         """Mean squared error of ``steps`` open-loop predictions from ``emb[:, 0]`` (contexts of at most ``window``)."""
+        emb = emb.detach()
         frames = [emb[:, 0]]
         errors = []
         for k in range(1, steps + 1):

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import torch
-from _tiny import TINY, assert_close, fit_losses
+from _tiny import TINY, assert_close, condition_on_actions, fit_losses
 
 from stable_worldmodel import keys, wm
 from stable_worldmodel.errors import ConfigError
@@ -51,6 +51,18 @@ def test_the_rollout_loss_is_the_error_of_planning_s_rollout(name):
     plain = make(name).eval().loss({keys.PIXELS: pixels, keys.ACTION: action})  # the same weights, K = 0
     assert "rollout_loss" not in plain
     assert_close(out["loss"] - out["rollout_loss"], plain["loss"])
+
+
+@pytest.mark.parametrize("name", ["lewm", "pldm"])
+def test_the_rollout_loss_trains_the_predictor_not_the_encoder(name):
+    model = condition_on_actions(make(name, rollout_steps=3)).train()  # AdaLN-zero at init ignores the actions
+    gen = torch.Generator().manual_seed(2)
+    batch = {keys.PIXELS: torch.randn(4, 4, 3, 16, 16, generator=gen), keys.ACTION: torch.randn(4, 4, 2, generator=gen)}
+    model.loss(batch)["rollout_loss"].backward()
+    assert all(p.grad is None for p in model.encoder.parameters())
+    assert all(p.grad is None for p in model.projector.parameters())
+    assert any(p.grad is not None and p.grad.abs().sum() > 0 for p in model.predictor.parameters())
+    assert any(p.grad is not None and p.grad.abs().sum() > 0 for p in model.action_encoder.parameters())
 
 
 @pytest.mark.parametrize("name", ["lewm", "pldm"])
