@@ -193,13 +193,18 @@ class JEPA(nn.Module):
         n = b * s
         act_emb = self.action_encoder(cand.reshape(n, h, -1))  # (BS, H, D)
         d = ctx.shape[-1]
-        out = ctx.new_empty(n, h + 1, d)
-        out[:, :t] = ctx.unsqueeze(1).expand(b, s, t, d).reshape(n, t, d)
-        for k in range(t, h + 1):
-            lo = max(0, k - hs)
-            out[:, k] = self._predict_last(out[:, lo:k], act_emb[:, lo:k])
+        out = self._open_loop(ctx.unsqueeze(1).expand(b, s, t, d).reshape(n, t, d), act_emb, hs, h + 1)
         info[PREDICTED_EMB] = out.reshape(b, h + 1, d) if squeeze else out.reshape(b, s, h + 1, d)
         return info
+
+    def _open_loop(self, context: torch.Tensor, act_emb: torch.Tensor, window: int, length: int) -> torch.Tensor:
+        """``context (N, t, D)`` followed by predictions up to ``length`` frames ``(N, length, D)``: frame ``k``
+        predicted from the (at most ``window``) frames before it, true or predicted, and their actions ``act_emb``."""
+        frames = list(context.unbind(1))
+        for k in range(len(frames), length):
+            lo = max(0, k - window)
+            frames.append(self._predict_last(torch.stack(frames[lo:k], 1), act_emb[:, lo:k]))
+        return torch.stack(frames, 1)
 
     def criterion(self, info: dict) -> torch.Tensor:
         """Squared distance to the last goal embedding of the last predicted embedding
@@ -253,14 +258,8 @@ class JEPA(nn.Module):
     def _rollout_error(self, emb: torch.Tensor, act_emb: torch.Tensor, window: int, steps: int) -> torch.Tensor:
         """Mean squared error of ``steps`` open-loop predictions from ``emb[:, 0]`` (contexts of at most ``window``)."""
         emb = emb.detach()
-        frames = [emb[:, 0]]
-        errors = []
-        for k in range(1, steps + 1):
-            lo = max(0, k - window)
-            nxt = self._predict_last(torch.stack(frames[lo:k], 1), act_emb[:, lo:k])
-            errors.append((nxt - emb[:, k]).square().mean())
-            frames.append(nxt)
-        return torch.stack(errors).mean()
+        pred = self._open_loop(emb[:, :1], act_emb, window, steps + 1)[:, 1:]
+        return (pred - emb[:, 1 : steps + 1]).square().mean()
 
     def loss(self, batch: dict) -> dict:  # pragma: no cover - abstract
         raise NotImplementedError("loss(batch) -> {'loss': scalar, ...named terms}")
