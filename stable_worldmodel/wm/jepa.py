@@ -96,6 +96,7 @@ class JEPA(nn.Module):
         self.__dict__.setdefault("extra_config", {})
         self.__dict__.setdefault("goal_cost", "final")
         self.__dict__.setdefault("obs_key", keys.PIXELS)
+        self.__dict__.setdefault("rollout_steps", 0)  # LeWM's and PLDM's training knob (ours; upstream has none)
 
     # -- sizes --------------------------------------------------------------------------------
     @property

@@ -91,3 +91,14 @@ def test_a_checkpoint_keeps_the_knob(tmp_path):
     model = make("lewm", rollout_steps=2)
     folder = save_pretrained(model, "ro", config=cfg.target_tree(2), cache_dir=tmp_path).parent
     assert load_pretrained(folder).rollout_steps == 2
+
+
+@pytest.mark.parametrize("name", ["lewm", "pldm"])
+def test_a_model_pickled_without_the_knob_trains_with_upstream_s_objective(name):
+    import pickle
+
+    model = make(name)
+    del model.__dict__["rollout_steps"]  # as upstream 0.1.1 pickles it (``*_object.ckpt``)
+    again = pickle.loads(pickle.dumps(model))
+    batch = {keys.PIXELS: torch.randn(2, 3, 3, 16, 16), keys.ACTION: torch.randn(2, 3, 2)}
+    assert again.rollout_steps == 0 and "rollout_loss" not in again.loss(batch)

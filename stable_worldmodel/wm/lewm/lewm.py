@@ -56,7 +56,7 @@ class LeWM(JEPA):
         """A LeWM that upstream 0.1.1 pickled (``*_object.ckpt``) lacks our training attributes:
         they get the constructor's defaults."""
         super().__setstate__(state)
-        for name, value in (("num_preds", 1), ("loss_history", None), ("rollout_steps", 0), ("sigreg_weight", 0.09)):
+        for name, value in (("num_preds", 1), ("loss_history", None), ("sigreg_weight", 0.09)):
             self.__dict__.setdefault(name, value)
         if "_sigreg" not in self.__dict__:
             self._sigreg = {"module": SIGReg(knots=17, num_proj=1024)}

@@ -68,8 +68,7 @@ class PLDM(JEPA):
         self.straightening = _Unregistered(TemporalStraighteningLoss())
 
     def loss(self, batch: dict) -> dict:
-        rollout = getattr(self, "rollout_steps", 0)  # a PLDM pickled by upstream has none
-        out, pred_loss = self._teacher_forcing(batch, self.loss_history, self.num_preds, rollout)
+        out, pred_loss = self._teacher_forcing(batch, self.loss_history, self.num_preds, self.rollout_steps)
         emb, action = out["emb"], out["action"]
         a_pred = a_target = None
         if getattr(self, "idm", None) is not None:
