@@ -200,8 +200,8 @@ if args["train_batch"]:
     bt, t = args["train_batch"], hist + 1
     batches = [(images(bt, t, 100 + i), torch.randn(bt, t, adim * block).to(device))
                for i in range(args["train_steps"] + 1)]
-    # ours: the optimizer our Trainer builds (fused AdamW on CUDA); upstream: torch's default AdamW
-    opt = torch.optim.AdamW(model.parameters(), lr=1e-4, fused=cuda and side == "ours")
+    # ours: the optimizer our Trainer builds (fused AdamW, CPU and CUDA); upstream: torch's default AdamW
+    opt = torch.optim.AdamW(model.parameters(), lr=1e-4, fused=side == "ours")
     sigreg = SIGReg(num_proj=args["num_proj"]).to(device)
     autocast = (torch.autocast(device.type, dtype=torch.bfloat16) if args.get("precision") == "bf16"
                 else contextlib.nullcontext())

@@ -38,6 +38,9 @@ PRECISIONS = ("32", "bf16", "16")
 BEST_NAME = "best"
 
 
+_FUSED_ADAMW_DEVICES = ("cpu", "cuda")
+
+
 def _param_groups(model: torch.nn.Module, lr: float, weight_decay: float, encoder_lr_scale: float) -> list[dict]:
     """Four groups: (encoder or not) x (decayed matrices or not-decayed vectors)."""
     groups: dict[tuple[bool, bool], list] = {}
@@ -198,8 +201,10 @@ class Trainer:
         self.steps, self.log_every, self.val_every, self.ckpt_every = steps, log_every, val_every, ckpt_every
         self.val_samples, self.progress = val_samples, progress
         self.config_tree, self.protocol = config_tree, protocol
-        self.optimizer = torch.optim.AdamW(  # one fused kernel per step on CUDA
-            _param_groups(model, cfg.lr, cfg.weight_decay, cfg.encoder_lr_scale), lr=cfg.lr, fused=device.type == "cuda"
+        self.optimizer = torch.optim.AdamW(  # fused: one kernel per step (CPU too: ~5x the default's speed)
+            _param_groups(model, cfg.lr, cfg.weight_decay, cfg.encoder_lr_scale),
+            lr=cfg.lr,
+            fused=device.type in _FUSED_ADAMW_DEVICES,
         )
         self.scheduler = torch.optim.lr_scheduler.LambdaLR(self.optimizer, _schedule(cfg.warmup_steps, steps))
         self.scaler = torch.amp.GradScaler(device.type, enabled=precision == "16")
