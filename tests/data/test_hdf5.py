@@ -199,3 +199,22 @@ def test_a_new_reader_sees_episodes_committed_since_an_older_reader_opened(tmp_p
     assert HDF5Dataset(path).lengths.tolist() == [3, 4, 5, 2]
     live.close()
     assert old.num_episodes == 1  # a reader keeps the episodes it opened with
+
+
+def test_a_strided_window_decodes_only_the_frames_it_keeps(make_h5, synth):
+    """Images stored one frame per chunk (64x64 ones are) are read frame by frame: a window of 3 frames at
+    frameskip 4 decodes 3 chunks, not the 12 rows it spans (nor a 1-MiB block of 85 frames around them)."""
+    image = (64, 64)
+    ds = HDF5Dataset(make_h5((30,), image=image), num_steps=3, frameskip=4, preload=False)
+    assert ds._handle()[keys.PIXELS].chunks[0] == 1
+    reads = []
+    checked = ds._checked
+    ds._checked = lambda shard, col, start, stop: reads.append((col, stop - start)) or checked(shard, col, start, stop)
+    frames = synth(0, 30, image)[keys.PIXELS].transpose(0, 3, 1, 2)
+    item = ds[5]
+    np.testing.assert_array_equal(item[keys.PIXELS].numpy(), frames[5:17:4])
+    assert sorted(n for col, n in reads if col == keys.PIXELS) == [1, 1, 1]
+    reads.clear()
+    batch = ds._batch([0, 9])
+    np.testing.assert_array_equal(batch[keys.PIXELS][1].numpy(), frames[9:21:4])
+    assert sum(n for col, n in reads if col == keys.PIXELS) <= 6  # frames 9 and 13 of window 1 are cached already
