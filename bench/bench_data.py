@@ -81,6 +81,17 @@ def main() -> None:
             f"dataloader_w{workers}_samples_per_s {np.median(rates):.0f} (batch 32, 40 batches, median of 3; "
             f"dataset construction {built * 1e3:.0f} ms not included)"
         )
+    # what training reads from a dataset too big to keep in memory: random windows of 4 frames at
+    # frameskip 5 (pixels + actions), read from the file (preload=False), batch 64
+    lazy = HDF5Dataset(path, num_steps=4, frameskip=5, preload=False, keys_to_load=["pixels", "action"])
+    batches = [rng.integers(0, len(lazy), 64) for _ in range(20)]
+    t0 = time.perf_counter()
+    for b in batches:
+        lazy._batch(b)
+    print(
+        f"lazy_window_samples_per_s {64 * len(batches) / (time.perf_counter() - t0):.0f} "
+        "(frameskip 5, 4 frames, pixels + action, from the file, random batches of 64)"
+    )
     world.close()
 
 
