@@ -1,13 +1,14 @@
 """Every model on upstream's Push-T protocol, side by side with the random floor on the same starts.
 
 Usage: python bench/bench_models_pusht.py [--models lewm pldm gcbc lewm-state lewm-state-ro pldm-state]
-       [--episodes 1000]
+       [--episodes 1000] [--preset tiny|cpu]
        [--steps N] [--num-envs 10] [--harder G] [--set KEY=VALUE ...] [--keep]
 
 What it runs, as a user would (the printed commands are the ones executed):
 
 1. ``swm collect swm/PushT-v1 --policy weak`` (upstream's collector: ``WeakPolicy``, random targets around the block);
-2. ``swm train MODEL --dataset pusht-weak --preset tiny`` for each model (``gcbc`` reads proprio, as upstream's);
+2. ``swm train MODEL --dataset pusht-weak --preset tiny`` (``--preset``) for each model (``gcbc`` reads proprio,
+   as upstream's);
 3. ``swm eval swm/PushT-v1 --policy P --protocol upstream --from-dataset pusht-weak`` for each model and for the
    random policy: 50 held-out starts, goal 25 steps later, budget 50, CEM 300 x 30, horizon 5, receding horizon 5,
    the final-state cost, no subgoals; every policy from the same starts (``--harder G``: also with the goal G
@@ -73,6 +74,7 @@ def main() -> None:
     parser.add_argument("--models", nargs="+", default=["lewm", "pldm", "gcbc"])
     parser.add_argument("--episodes", type=int, default=1000, help="weak-policy episodes to collect")
     parser.add_argument("--steps", type=int, default=None, help="training steps (default: each preset's)")
+    parser.add_argument("--preset", default="tiny", help="the models' preset (cpu: LeWM's Push-T recipe for a CPU)")
     parser.add_argument("--num-envs", type=int, default=10)
     parser.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE", help="config overrides for every model")
     parser.add_argument("--keep", action="store_true", help="use $STABLEWM_HOME instead of a scratch folder")
@@ -95,7 +97,7 @@ def main() -> None:
             "--dataset",
             DATASET,
             "--preset",
-            "tiny",
+            args.preset,
             "--name",
             f"pusht-{model}",
         ]

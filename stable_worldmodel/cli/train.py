@@ -272,7 +272,10 @@ def train_cmd(
     preset: Annotated[
         str,
         typer.Option(
-            "--preset", metavar="PRESET", help="Sizes and recipe: tiny (CPU, minutes), small (GPU), paper (upstream's)."
+            "--preset",
+            metavar="PRESET",
+            help="Sizes and recipe: tiny (CPU, minutes), cpu (LeWM on a CPU, under an hour), small (GPU), "
+            "paper (upstream's).",
         ),
     ] = "tiny",
     steps: Annotated[
