@@ -330,7 +330,7 @@ def test_images_with_other_channels_than_the_model(refused):
         (dict(seed=-1), r"seed to be an int >= 0, got -1"),
         (dict(name="a/b"), r"plain run name \(no path\), got 'a/b'"),
         (dict(embed_dims=8), r"no field 'embed_dims'\. Did you mean one of 'embed_dim'"),
-        (dict(preset="huge"), r"preset in \['paper', 'small', 'tiny'\], got 'huge'"),
+        (dict(preset="huge"), r"preset in \['cpu', 'paper', 'small', 'tiny'\], got 'huge'"),
         (dict(lr=2.0), r"0 < lr < 1"),
     ],
     ids=lambda v: "-".join(f"{k}={v[k]}" for k in v) if isinstance(v, dict) else "",
