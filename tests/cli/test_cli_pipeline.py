@@ -203,11 +203,20 @@ def test_eval_unknown_env_suggests(swm, error_line):
 
 
 # -- envs / fovs ---------------------------------------------------------------------------
-def test_envs_lists_every_env_with_factor_count(swm):
+def test_envs_lists_every_env_with_factor_count():
+    import os
+    import subprocess
+    import sys
+
     from stable_worldmodel.planning.policies import variation_space_of
 
-    result = swm("envs")
-    assert result.exit_code == 0
+    # in a child process: listing every env builds them all, and Craftax's import would leave JAX's threads in this
+    # one, under every later test that forks (DataLoader workers, killed writers)
+    env = {**os.environ, "COLUMNS": "200"}
+    result = subprocess.run(
+        [sys.executable, "-m", "stable_worldmodel", "envs"], capture_output=True, text=True, env=env
+    )
+    assert result.returncode == 0, result.stderr[-2000:]
     for env_id in list_envs():
         assert env_id in result.stdout
     row = next(line for line in result.stdout.splitlines() if TOY in line)
@@ -258,7 +267,7 @@ def test_fovs_unknown_env(swm, error_line):
 
 
 def test_no_cache_written_by_read_only_commands(swm):
-    for args in (("envs",), ("fovs", TOY), ("list", "world")):
+    for args in (("envs", "--tag", "toy"), ("fovs", TOY), ("list", "world")):
         assert swm(*args).exit_code == 0
     assert not any(get_cache_dir().glob("*.h5"))
 
