@@ -1,7 +1,7 @@
 """World-model benchmark: LeWM training samples/s and planning time per plan, ours vs upstream 0.1.1,
 with the same weights.
 
-    python bench/bench_wm.py [--peer ../peer011-venv/bin/python] [--model tiny-vit|paper] [--envs 1,10]
+    python bench/bench_wm.py [--peer ../peer011-venv/bin/python] [--model tiny-vit|tiny-vit-h3|paper] [--envs 1,10]
                              [--samples 300] [--iterations 30] [--horizon 5] [--repeats 3] [--threads 2]
                              [--device cpu|cuda] [--precision 32|bf16]
 
@@ -42,6 +42,17 @@ MODELS = {
     "tiny-vit": (
         "tiny",
         {"encoder": "vit", "vit_size": "tiny", "patch_size": 8, "vit_overrides": {"num_hidden_layers": 2}},
+    ),
+    # the same with a history of 3 frames (the `cpu` and `paper` presets' history)
+    "tiny-vit-h3": (
+        "tiny",
+        {
+            "encoder": "vit",
+            "vit_size": "tiny",
+            "patch_size": 8,
+            "vit_overrides": {"num_hidden_layers": 2},
+            "history_size": 3,
+        },
     ),
     "paper": ("paper", {}),
 }

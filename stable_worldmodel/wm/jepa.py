@@ -202,9 +202,18 @@ class JEPA(nn.Module):
         """``context (N, t, D)`` followed by predictions up to ``length`` frames ``(N, length, D)``: frame ``k``
         predicted from the (at most ``window``) frames before it, true or predicted, and their actions ``act_emb``."""
         frames = list(context.unbind(1))
+        act_emb = act_emb[:, : length - 1]
+        predictor = self.predictor
+        # LeWM's / PLDM's predictor with windows of several frames: each action's AdaLN modulation
+        # once, not once per window it sits in, and only the last token through the last block
+        mods = predictor.condition(act_emb) if window > 1 and hasattr(predictor, "forward_last") else None
         for k in range(len(frames), length):
             lo = max(0, k - window)
-            frames.append(self._predict_last(torch.stack(frames[lo:k], 1), act_emb[:, lo:k]))
+            x = torch.stack(frames[lo:k], 1)
+            if mods is None:
+                frames.append(self._predict_last(x, act_emb[:, lo:k]))
+            else:
+                frames.append(self.pred_proj(predictor.forward_last(x, [m[:, lo:k] for m in mods])))
         return torch.stack(frames, 1)
 
     def criterion(self, info: dict) -> torch.Tensor:

@@ -87,6 +87,44 @@ def test_rollout_first_prediction_is_predict(jepa):
     assert_close(rolled[:, 1], step[:, -1])
 
 
+def _reference_rollout(model, context: torch.Tensor, act_emb: torch.Tensor, window: int) -> torch.Tensor:
+    """The open loop written plainly: every window through ``predict``, its last output kept."""
+    frames = list(context.unbind(1))
+    for k in range(len(frames), act_emb.shape[1] + 1):
+        lo = max(0, k - window)
+        frames.append(model.predict(torch.stack(frames[lo:k], 1), act_emb[:, lo:k])[:, -1])
+    return torch.stack(frames, 1)
+
+
+@pytest.mark.parametrize("depth", [1, 2])
+@pytest.mark.parametrize("context", [1, 2, 3])
+def test_rollouts_over_windows_of_frames_equal_the_plain_loop(make_model, depth, context):
+    """With a history of several frames the rollout computes each action's modulation once and
+    only the last token through the last block: values and gradients equal the plain loop's."""
+    for name in ("lewm", "pldm"):
+        model = condition_on_actions(make_model(name, depth=depth, history_size=3)).eval()
+        emb, act = randn(4, context, D), randn(4, 5, D, seed=1)
+        ours = model._open_loop(emb, act, 3, 6)
+        ref = _reference_rollout(model, emb, act, 3)
+        assert ours.shape == ref.shape == (4, 6, D)
+        assert_close(ours, ref, atol=1e-6)
+        params = [p for n, p in model.named_parameters() if n.startswith(("predictor.", "pred_proj."))]
+        grads = torch.autograd.grad(ours.square().sum(), params)
+        ref_grads = torch.autograd.grad(ref.square().sum(), params)
+        for g, r in zip(grads, ref_grads, strict=True):
+            assert_close(g, r, atol=1e-5)
+
+
+def test_the_predictor_s_last_output_from_its_conditioning_equals_forward(make_model):
+    predictor = condition_on_actions(make_model("lewm", depth=2, history_size=3)).predictor.eval()
+    x, c = randn(5, 3, D), randn(5, 3, D, seed=1)
+    mods = predictor.condition(c)
+    for t in (1, 2, 3):
+        assert_close(predictor.forward_last(x[:, :t], [m[:, :t] for m in mods]), predictor(x[:, :t], c[:, :t])[:, -1])
+    with pytest.raises(ValueError, match="at most num_frames=3"):
+        predictor.forward_last(randn(5, 4, D), [randn(5, 4, 6 * D)] * 2)
+
+
 def test_rollout_needs_one_action_per_context_frame(jepa):
     with pytest.raises(ConfigError, match="at least 2 actions"):
         jepa.rollout({keys.PIXELS: images(2, 2)}, randn(2, 1, A))

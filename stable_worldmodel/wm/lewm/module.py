@@ -75,6 +75,20 @@ class Attention(nn.Module):
         )
         return self.to_out(out.transpose(1, 2).reshape(b, t, self.heads * self.dim_head))
 
+    def forward_last(self, x: torch.Tensor) -> torch.Tensor:
+        """The last row of ``forward(x, causal=True)``: ``(B, T, dim) -> (B, 1, dim)``; the last token
+        attends to every token, so only its query is computed."""
+        b, t, _ = x.shape
+        if t == 1:
+            return self(x)
+        inner = self.heads * self.dim_head
+        h = self.norm(x)
+        q = F.linear(h[:, -1:], self.to_qkv.weight[:inner])
+        k, v = F.linear(h, self.to_qkv.weight[inner:]).chunk(2, dim=-1)
+        p = self.dropout if self.training else 0.0
+        out = F.scaled_dot_product_attention(self._heads(q), self._heads(k), self._heads(v), dropout_p=p)
+        return self.to_out(out.transpose(1, 2).reshape(b, 1, inner))
+
 
 def _modulate(x: torch.Tensor, shift: torch.Tensor, scale: torch.Tensor) -> torch.Tensor:
     return torch.addcmul(shift, x, 1 + scale)
@@ -95,8 +109,18 @@ class ConditionalBlock(nn.Module):
         nn.init.zeros_(self.adaLN_modulation[1].bias)
 
     def forward(self, x: torch.Tensor, c: torch.Tensor) -> torch.Tensor:
-        shift1, scale1, gate1, shift2, scale2, gate2 = self.adaLN_modulation(c).chunk(6, dim=-1)
-        x = x + gate1 * self.attn(_modulate(self.norm1(x), shift1, scale1))
+        return self.modulated(x, self.adaLN_modulation(c))
+
+    def modulated(self, x: torch.Tensor, mod: torch.Tensor, last: bool = False) -> torch.Tensor:
+        """``forward`` with the condition's modulation ``adaLN_modulation(c): (B, T, 6 * dim)`` given
+        (computed once per rollout). ``last=True``: only the last token's output ``(B, 1, dim)``."""
+        shift1, scale1, gate1, shift2, scale2, gate2 = mod.chunk(6, dim=-1)
+        h = _modulate(self.norm1(x), shift1, scale1)
+        if last and x.shape[1] > 1:
+            x, shift2, scale2, gate1, gate2 = x[:, -1:], shift2[:, -1:], scale2[:, -1:], gate1[:, -1:], gate2[:, -1:]
+            x = x + gate1 * self.attn.forward_last(h)
+        else:
+            x = x + gate1 * self.attn(h)
         return x + gate2 * self.mlp(_modulate(self.norm2(x), shift2, scale2))
 
 
@@ -195,6 +219,27 @@ class Predictor(nn.Module):
         if t > self.num_frames:
             raise ValueError(f"Predictor requires at most num_frames={self.num_frames} frames, got {t}")
         return self.transformer(self.dropout(x + self.pos_embedding[:, :t]), c)
+
+    # -- open-loop rollouts: the actions' modulation computed once, only the last output ---------------
+    def condition(self, c: torch.Tensor) -> list[torch.Tensor]:
+        """Per block, the AdaLN modulation of action embeddings ``c: (B, T, input_dim)``:
+        ``(B, T, 6 * hidden_dim)`` each. A rollout computes it once for all its actions and hands
+        :meth:`forward_last` the slices of each window (each action sits in up to ``num_frames`` windows)."""
+        c = self.transformer.cond_proj(c)
+        return [block.adaLN_modulation(c) for block in self.transformer.layers]
+
+    def forward_last(self, x: torch.Tensor, mods: list[torch.Tensor]) -> torch.Tensor:
+        """The last output of ``forward(x, c)``, ``(B, output_dim)``, from ``mods``: :meth:`condition`
+        of ``c``, sliced to ``x``'s frames. The last block computes the last token only."""
+        t = x.shape[1]
+        if t > self.num_frames:
+            raise ValueError(f"Predictor requires at most num_frames={self.num_frames} frames, got {t}")
+        tr = self.transformer
+        x = tr.input_proj(self.dropout(x + self.pos_embedding[:, :t]))
+        last = len(tr.layers) - 1
+        for i, (block, mod) in enumerate(zip(tr.layers, mods, strict=True)):
+            x = block.modulated(x, mod, last=i == last)
+        return tr.output_proj(tr.norm(x[:, -1]))
 
 
 class Embedder(nn.Module):
