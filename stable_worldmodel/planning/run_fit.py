@@ -13,6 +13,7 @@ Nothing here imports torch; a run is described by its protocol alone.
 from __future__ import annotations
 
 import json
+import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -181,7 +182,11 @@ def partial_note(who: str, protocol: dict[str, Any]) -> str | None:
     if partial is None:
         return None
     done, steps = partial
+    name = who.split(":", 1)[-1]
+    run, _, leaf = name.rpartition("/")
+    if run and (leaf == "best" or re.fullmatch(r"step_\d+", leaf)):  # a snapshot the Trainer keeps in RUN/
+        return f"{who} is a checkpoint kept while {run} trained: step {done} of {steps}"
     return (
         f"{who} uses the checkpoint of step {done} of {steps} (partial run: training stopped before its last step; "
-        f"continue it with swm train ... --name {who.split(':', 1)[-1]} --resume)"
+        f"continue it with swm train ... --name {name} --resume)"
     )

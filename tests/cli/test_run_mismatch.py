@@ -221,6 +221,16 @@ def test_a_partial_run_says_which_checkpoint_it_uses(swm, home, final):
     assert f"wm:{RUN} uses the checkpoint of step 1 of 2 (partial run" in line
 
 
+@pytest.mark.parametrize("leaf", ["step_000001", "best"])
+def test_a_snapshot_kept_during_training_is_not_called_a_partial_run(leaf):
+    from stable_worldmodel.planning.run_fit import partial_note
+
+    protocol = {"final": None, "steps_done": 1, "steps": 2}
+    note = partial_note(f"wm:{RUN}/{leaf}", protocol)
+    assert note == f"wm:{RUN}/{leaf} is a checkpoint kept while {RUN} trained: step 1 of 2"
+    assert "--resume" in partial_note(f"wm:{RUN}", protocol)
+
+
 def test_partial_run_needs_fewer_steps_done_than_steps():
     from stable_worldmodel.planning.run_fit import partial_run
 
