@@ -108,7 +108,7 @@ def _far_pairs(dataset: Any, pairs: list[tuple[int, int]], goal_offset: int, min
 
 def _from_dataset(
     world: Any,
-    name: str,
+    name: str | Path,
     episodes: int,
     goal_offset: int,
     budget: int,
@@ -118,7 +118,8 @@ def _from_dataset(
 ) -> dict:
     from ..data import HDF5Dataset
 
-    dataset = HDF5Dataset(name, preload=False)
+    # a Path: the dataset's file (or shard folder) itself, as a run's protocol records it
+    dataset = HDF5Dataset(path=name, preload=False) if isinstance(name, Path) else HDF5Dataset(name, preload=False)
     eps, starts = dataset_starts(dataset, episodes, goal_offset, seed, pool, min_distance)
     n = world.num_envs
     successes, steps = [], []

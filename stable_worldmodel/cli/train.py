@@ -47,6 +47,7 @@ FLAGS = {
     "eval_every": "--eval-every",
     "eval_episodes": "--eval-episodes",
     "eval_env": "--eval-env",
+    "eval_protocol": "--eval-protocol",
     "frameskip": "--frameskip",
     "source": "--from",
     "logger": "--logger",
@@ -77,6 +78,7 @@ _NAME_KEYS = (
     "init_from",
     "logger",
     "wandb_project",
+    "eval_protocol",
 )
 
 
@@ -359,11 +361,28 @@ def train_cmd(
         ),
     ] = None,
     eval_episodes: Annotated[
-        int,
+        int | None,
         typer.Option(
-            "--eval-episodes", parser=int_in(1), metavar="N", help="With --eval-every: episodes per evaluation."
+            "--eval-episodes",
+            parser=int_in(1),
+            metavar="N",
+            help="With --eval-every: episodes per evaluation (default 10; under --eval-protocol, the protocol's).",
+            show_default=False,
         ),
-    ] = 10,
+    ] = None,
+    eval_protocol: Annotated[
+        str | None,
+        typer.Option(
+            "--eval-protocol",
+            metavar="NAME",
+            help=(
+                "With --eval-every: evaluate as swm eval --protocol NAME does (upstream: its planner, goal offset "
+                "and budget, from the run's validation episodes); eval/train_seconds gives the success curve "
+                "against training time."
+            ),
+            show_default=False,
+        ),
+    ] = None,
     eval_env: Annotated[
         str | None,
         typer.Option(
@@ -524,6 +543,7 @@ def train_cmd(
         "eval_every": eval_every,
         "eval_episodes": eval_episodes,
         "eval_env": eval_env,
+        "eval_protocol": eval_protocol,
         "frameskip": frameskip,
         "source": source,
         "logger": logger,
@@ -562,7 +582,7 @@ def train_cmd(
             raise typer.BadParameter("trains online from a fresh model: drop --init-from", param_hint="--online")
         if flags.pop("eval_every") is not None:
             raise typer.BadParameter("logs its own collections' success: drop --eval-every", param_hint="--online")
-        flags.pop("eval_episodes"), flags.pop("eval_env")
+        flags.pop("eval_episodes"), flags.pop("eval_env"), flags.pop("eval_protocol")
         overrides.setdefault("progress", sys.stderr.isatty())
         for key in ("epochs", "precision"):
             flags.pop(key)

@@ -53,7 +53,9 @@ TRAIN_KEY_HELP: dict[str, str] = {
     "progress": "Show a progress bar (swm train: when stderr is a terminal).",
     "feature_cache": "Cache a frozen encoder's features on disk, once per dataset (false: encode every batch).",
     "eval_every": "Evaluate the checkpoint in the env every K steps and at the end; keep the best as RUN/best.",
-    "eval_episodes": "Episodes per evaluation (with eval_every).",
+    "eval_episodes": "Episodes per evaluation (with eval_every; default 10, under eval_protocol the protocol's).",
+    "eval_protocol": "Evaluate under this protocol (upstream: swm eval --protocol upstream, from the run's "
+    "validation episodes).",
     "eval_env": "The env to evaluate in (with eval_every; default: the dataset's).",
     "eval_plan": "Planner settings of the evaluations, a PlanSettings (Python API only).",
     "logger": "Where metrics go besides metrics.jsonl/.csv: tensorboard, wandb (TensorBoard and W&B) or none.",
@@ -102,8 +104,9 @@ def train(
     progress: bool = True,
     feature_cache: bool = True,
     eval_every: int | None = None,
-    eval_episodes: int = 10,
+    eval_episodes: int | None = None,
     eval_env: str | None = None,
+    eval_protocol: str | None = None,
     eval_plan: Any = None,
     logger: str = "tensorboard",
     wandb_project: str | None = None,
@@ -127,11 +130,14 @@ def train(
     ``batch_size`` is the global batch). A model with a frozen
     encoder (PreJEPA) trains on its features, computed once per dataset and encoder and kept on
     disk (:mod:`stable_worldmodel.train.features`; ``feature_cache=False`` encodes every batch).
-    ``eval_every=K`` evaluates the checkpoint every K steps and at the end: ``eval_episodes``
+    ``eval_every=K`` evaluates the checkpoint every K steps and at the end: ``eval_episodes`` (10)
     seeded episodes of ``eval_env`` (default: the dataset's env) planned as ``swm eval`` plans
     (plain MPC, no subgoals; ``eval_plan``: other
-    :class:`~stable_worldmodel.planning.learned.PlanSettings`); the success rate and its 95% interval
-    are logged (``eval/...``) and the best checkpoint is kept as ``<run>/best`` (``swm eval --policy
+    :class:`~stable_worldmodel.planning.learned.PlanSettings`), or with ``eval_protocol="upstream"``
+    what ``swm eval --protocol upstream`` runs (its planner, seed, goal offset and budget; ``eval_episodes``
+    default: its 50) from the run's validation episodes; the success rate and its 95% interval
+    are logged (``eval/...``, with ``eval/train_seconds``, the training time so far: a success curve
+    against training time) and the best checkpoint is kept as ``<run>/best`` (``swm eval --policy
     wm:RUN/best``).
     ``logger`` says where the metrics go besides ``metrics.jsonl`` / ``metrics.csv`` (always written):
     ``"tensorboard"`` (the default), ``"wandb"`` (TensorBoard and a Weights & Biases run named after
@@ -148,6 +154,12 @@ def train(
     _positive("batch_size", batch_size)
     _positive("eval_every", eval_every)
     _positive("eval_episodes", eval_episodes)
+    if eval_protocol is not None:
+        from ..cli.evaluation import PROTOCOLS
+        from ..errors import unknown_name
+
+        if eval_protocol not in PROTOCOLS:
+            raise unknown_name("evaluation protocol", eval_protocol, PROTOCOLS)
     check_int("train", "log_every", log_every)
     for key, value in (("val_every", val_every), ("ckpt_every", ckpt_every)):
         if value is not None:
@@ -200,7 +212,7 @@ def train(
             ckpt_every=ckpt_every,
             progress=progress,
             feature_cache=feature_cache,
-            evaluation=(eval_every, eval_episodes, eval_env, eval_plan) if eval_every else None,
+            evaluation=(eval_every, eval_episodes, eval_env, eval_plan, eval_protocol) if eval_every else None,
             metrics_to=(logger_name, wandb_project),
             protocol_extra=protocol_extra or {},
             cfg=cfg,
@@ -215,27 +227,80 @@ def train(
 
 
 def _evaluate_checkpoint(
-    trainer: Any, *, env: str, episodes: int, seed: int, cache_dir: str | None, plan: Any = None
+    trainer: Any,
+    *,
+    env: str,
+    episodes: int | None,
+    seed: int,
+    cache_dir: str | None,
+    plan: Any = None,
+    protocol: str | None = None,
 ) -> dict[str, Any]:
     """Plan with the run's latest checkpoint in ``env`` (``swm eval``'s defaults, no subgoals) for
-    ``episodes`` seeded episodes; the success rate and its 95% interval, in percent."""
+    ``episodes`` seeded episodes (default 10), or under evaluation protocol ``protocol`` (``swm eval
+    --protocol``: its knobs, from the run's validation episodes; ``episodes`` default: the protocol's);
+    the success rate and its 95% interval, in percent (under a protocol also the ``starts``: dataset
+    episode and step of each episode)."""
     import numpy as np
 
     from ..cli.stats import wilson_interval
     from ..planning.learned import PlanSettings, world_model_policy
     from ..planning.policies import episode_limit, make_world
 
-    settings = plan if plan is not None else PlanSettings(seed=seed, subgoals="none")
-    policy, protocol = world_model_policy(trainer.run, settings, device=str(trainer.device), cache_dir=cache_dir)
-    size = int(protocol.get("image_size") or 64)
-    with make_world(
-        env, num_envs=1, image_size=size, max_steps=episode_limit(env, None), seed=seed, verbose=0
-    ) as world:
-        world.set_policy(policy)
-        results = world.evaluate(episodes=episodes, seed=seed)
+    knobs: dict[str, Any] = {}
+    if protocol is not None:
+        from ..cli.evaluation import protocol_knobs
+
+        knobs = protocol_knobs(protocol, env)
+        seed = knobs["seed"]
+        episodes = episodes or knobs["episodes"]
+        plan_knobs = ("solver", "horizon", "receding_horizon", "samples", "iterations", "cost", "subgoals")
+        settings = plan if plan is not None else PlanSettings(seed=seed, **{k: knobs[k] for k in plan_knobs})
+    else:
+        episodes = episodes or 10
+        settings = plan if plan is not None else PlanSettings(seed=seed, subgoals="none")
+    policy, run_protocol = world_model_policy(trainer.run, settings, device=str(trainer.device), cache_dir=cache_dir)
+    size = int(run_protocol.get("image_size") or 64)
+    if protocol is not None:
+        from pathlib import Path
+
+        from ..cli.evaluation import _from_dataset
+
+        budget = knobs["budget"]
+        with make_world(env, num_envs=min(10, episodes), image_size=size, max_steps=budget, seed=seed, verbose=0) as w:
+            w.set_policy(policy)
+            pool = trainer.protocol.get("val_episodes") or None  # the episodes this run never trains on
+            path = Path(trainer.protocol["dataset_path"])
+            results = _from_dataset(w, path, episodes, knobs["goal_offset"], budget, seed, pool)
+    else:
+        with make_world(
+            env, num_envs=1, image_size=size, max_steps=episode_limit(env, None), seed=seed, verbose=0
+        ) as world:
+            world.set_policy(policy)
+            results = world.evaluate(episodes=episodes, seed=seed)
     successes = int(np.asarray(results["episode_successes"], bool).sum())
     low, high = wilson_interval(successes, episodes)
-    return {"success_rate": 100.0 * successes / episodes, "ci95": [100.0 * low, 100.0 * high], "episodes": episodes}
+    out = {"success_rate": 100.0 * successes / episodes, "ci95": [100.0 * low, 100.0 * high], "episodes": episodes}
+    if protocol is not None:  # where each episode started: (dataset episode, step)
+        out["starts"] = [[int(e), int(t)] for e, t in zip(results["episodes_idx"], results["start_steps"], strict=True)]
+    return out
+
+
+def _check_protocol_starts(data: Any, protocol: dict[str, Any], name: str, env: str) -> None:
+    """Before training: evaluations under protocol ``name`` need held-out episodes longer than its goal offset."""
+    import numpy as np
+
+    from ..cli.evaluation import protocol_knobs
+
+    offset = protocol_knobs(name, env)["goal_offset"]
+    lengths = np.asarray(data.dataset.lengths)
+    pool = protocol.get("val_episodes") or list(range(len(lengths)))
+    longest = int(lengths[pool].max()) if len(pool) else 0
+    if longest <= offset:
+        raise ConfigError(
+            f"train(eval_protocol={name!r}) requires validation episodes longer than the protocol's goal offset "
+            f"({offset} steps on {env}), got at most {longest} rows; record longer episodes or drop eval_protocol"
+        )
 
 
 def _load_init_weights(net: Any, source: str, cache_dir: str | None) -> dict[str, Any]:
@@ -431,7 +496,7 @@ def _train_locked(
     if dist_info.is_main:
         folder.mkdir(parents=True, exist_ok=True)
     if evaluation is not None:
-        every, episodes, env, plan = evaluation
+        every, episodes, env, plan, eval_protocol = evaluation
         env = env or protocol.get("env")
         if not env:
             raise ConfigError(
@@ -440,10 +505,19 @@ def _train_locked(
         from functools import partial
 
         trainer.evaluator = partial(
-            _evaluate_checkpoint, env=env, episodes=episodes, seed=seed, cache_dir=cache_dir, plan=plan
+            _evaluate_checkpoint,
+            env=env,
+            episodes=episodes,
+            seed=seed,
+            cache_dir=cache_dir,
+            plan=plan,
+            protocol=eval_protocol,
         )
         trainer.eval_every = every
         protocol["evaluation"] = {"env": env, "every": every, "episodes": episodes, "seed": seed}
+        if eval_protocol is not None:
+            _check_protocol_starts(data, protocol, eval_protocol, env)
+            protocol["evaluation"]["protocol"] = eval_protocol
     if state is not None:  # the trainer was built for `steps`: an extended run's schedule is the new total's
         trainer.load_state_dict(state)
     kind, project = metrics_to

@@ -226,6 +226,10 @@ class Trainer:
         self.evaluator: Any = None
         self.eval_every = 0
         self.best_eval: float | None = None
+        # training time (evaluations excluded) of the steps before this fit (a resumed run's); this fit's clock
+        self._seconds_before = 0.0
+        self._fit_start: float | None = None
+        self._eval_spent = 0.0
         self.window: list[
             Any
         ] = []  # train losses (floats or 0-d tensors) since the last log (checkpointed, for exact resume)
@@ -246,6 +250,7 @@ class Trainer:
             "steps": self.steps,
             "loss_window": [float(v) for v in self.window],
             "best_eval": self.best_eval,
+            "train_seconds": self.train_seconds(),
         }
 
     def load_state_dict(self, state: dict[str, Any]) -> None:
@@ -256,6 +261,7 @@ class Trainer:
         self.step = int(state["step"])
         self.window = [float(v) for v in state.get("loss_window", [])]
         self.best_eval = state.get("best_eval")
+        self._seconds_before = float(state.get("train_seconds", 0.0))
         set_rng_state(state["rng"], self.generator)
 
     def save(self, final: bool = False) -> None:
@@ -269,6 +275,12 @@ class Trainer:
         wmu._atomic_write(self.folder / STATE_NAME, wmu._write_bytes(wmu.serialize_state(self.state_dict())))
 
     # -- evaluation during training ------------------------------------------------------------
+    def train_seconds(self) -> float:
+        """Seconds spent training so far, resumed runs' earlier time included and evaluations excluded."""
+        if self._fit_start is None:
+            return self._seconds_before
+        return self._seconds_before + time.perf_counter() - self._fit_start - self._eval_spent
+
     def _eval_due(self) -> bool:
         return bool(self.evaluator is not None and self.eval_every and self.step % self.eval_every == 0)
 
@@ -280,11 +292,22 @@ class Trainer:
         if not self.dist.is_main:
             return
         devices = [self.device] if self.device.type == "cuda" else []
+        trained = self.train_seconds()
+        began = time.perf_counter()
         with torch.random.fork_rng(devices=devices):
             result = self.evaluator(self)
+        self._eval_spent += time.perf_counter() - began
         rate = float(result["success_rate"])
         low, high = (float(v) for v in result["ci95"])
-        log.log({"step": self.step, "eval/success_rate": rate, "eval/ci95_low": low, "eval/ci95_high": high})
+        log.log(
+            {
+                "step": self.step,
+                "eval/success_rate": rate,
+                "eval/ci95_low": low,
+                "eval/ci95_high": high,
+                "eval/train_seconds": trained,
+            }
+        )
         logger.info(
             "step %d: success %.1f%% [%.1f, %.1f] on %d episodes", self.step, rate, low, high, result["episodes"]
         )
@@ -345,6 +368,7 @@ class Trainer:
         bs = self.cfg.batch_size
         self.model.train()
         start, start_step = time.perf_counter(), self.step
+        self._fit_start, self._eval_spent = start, 0.0
         logged = log.read()  # a resumed run's records up to its step (a finished run has no step left to log)
         last_loss = next((r["train/loss"] for r in reversed(logged) if "train/loss" in r), float("nan"))
         val_loss = next((r["val/loss"] for r in logged if "val/loss" in r and r.get("step") == self.step), None)
@@ -385,7 +409,7 @@ class Trainer:
                             f"Training diverged: loss {losses} in the {len(losses)} steps up to step {self.step}; "
                             "lower --lr or use --precision 32"
                         )
-                    rate = (self.step - start_step) * bs / max(time.perf_counter() - start, 1e-9)
+                    rate = (self.step - start_step) * bs / max(time.perf_counter() - start - self._eval_spent, 1e-9)
                     record = {
                         "step": self.step,
                         "train/loss": last_loss,

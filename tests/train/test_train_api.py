@@ -474,6 +474,36 @@ def test_evaluation_during_training_logs_success_keeps_the_best_and_changes_no_w
         fit("lewm", "bad", steps=2, eval_every=0)
 
 
+def test_evaluation_under_upstream_s_protocol_starts_from_the_run_s_held_out_episodes(fit, _stablewm_home):
+    """``eval_protocol="upstream"``: each evaluation runs what ``swm eval --protocol upstream`` runs (goal 25
+    steps on, budget 50, seed 42), from the run's validation episodes; ``eval/train_seconds`` grows with
+    the steps and leaves the evaluations out."""
+    from stable_worldmodel import World
+    from stable_worldmodel.planning.learned import PlanSettings
+    from stable_worldmodel.policy import RandomPolicy
+
+    with World("swm/Toy-v0", 2, (16, 16), max_episode_steps=40, verbose=0) as world:  # 41-row episodes
+        world.set_policy(RandomPolicy(seed=0))
+        world.record_dataset("long", episodes=10, seed=0, cache_dir=_stablewm_home)
+    quick = PlanSettings(samples=8, iterations=1, horizon=2, receding_horizon=2, subgoals="none")
+    result = fit(
+        "lewm", "proto", dataset="long", steps=4, log_every=2, eval_every=2, eval_episodes=3, eval_protocol="upstream",
+        eval_plan=quick,
+    )  # fmt: skip
+    protocol = json.loads((result.folder / "protocol.json").read_text())
+    assert protocol["evaluation"]["protocol"] == "upstream"
+    evals = [r for r in result.history if "eval/success_rate" in r]
+    assert [r["step"] for r in evals] == [2, 4]
+    seconds = [r["eval/train_seconds"] for r in evals]
+    assert 0.0 < seconds[0] < seconds[1] < result.seconds
+    best = json.loads((result.folder / "best" / "protocol.json").read_text())["best"]
+    assert best["episodes"] == 3 and len(best["starts"]) == 3
+    for episode, start in best["starts"]:
+        assert episode in protocol["val_episodes"] and 0 <= start < 41 - 25  # the goal lies 25 steps on
+    with pytest.raises(UnknownNameError, match="Did you mean 'upstream'"):
+        fit("lewm", "typo", dataset="long", steps=2, eval_every=1, eval_protocol="upstrem")
+
+
 def test_a_run_records_versions_commit_command_host_and_times(fit, monkeypatch, tmp_path):
     import re
     import subprocess

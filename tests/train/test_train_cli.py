@@ -66,6 +66,16 @@ def test_eval_every_prints_the_last_and_best_evaluation(swm, toy, _stablewm_home
     assert (_stablewm_home / "checkpoints" / "e" / "best" / "weights.pt").is_file()
 
 
+def test_eval_protocol_is_checked_before_training(swm, toy, error_line):
+    args = ("train", "dummy", "--dataset", toy, "--steps", "2", "--name", "p", *QUICK)
+    typo = swm(*args, "--eval-every", "1", "--eval-protocol", "upstrem")
+    assert typo.exit_code == 1 and "Did you mean 'upstream'" in error_line(typo), typo.output
+    # the toy episodes are 3 to 13 rows: no goal lies 25 steps on
+    short = swm(*args, "--eval-every", "1", "--eval-protocol", "upstream")
+    assert short.exit_code == 1 and "longer than the protocol's goal offset (25 steps" in error_line(short)
+    assert swm(*args).exit_code == 0  # nothing was left behind under the name
+
+
 def test_a_second_run_of_that_name_needs_resume(swm, toy, error_line):
     args = ("train", "dummy", "--dataset", toy, "--steps", "4", "--name", "r", *QUICK)
     first = swm(*args)
