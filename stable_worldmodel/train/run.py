@@ -355,7 +355,8 @@ class MetricsLog:
 
 
 def plot_losses(records: list[dict[str, Any]], path: Path, title: str) -> Path | None:
-    """Train loss (and its terms) and validation loss against the step, log scale, as a PNG."""
+    """Train loss (and its terms) and validation loss against the step, log scale, as a PNG; with
+    evaluations (``eval/success_rate``) a second panel: the success rate and its 95% interval."""
     train = [r for r in records if "train/loss" in r]
     if not train:
         return None
@@ -364,8 +365,12 @@ def plot_losses(records: list[dict[str, Any]], path: Path, title: str) -> Path |
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(6, 3.8), dpi=120)
+    evals = [r for r in records if "eval/success_rate" in r]
+    fig, axes = plt.subplots(1, 2 if evals else 1, figsize=(11 if evals else 6, 3.8), dpi=120, squeeze=False)
+    ax = axes[0][0]
     try:
+        if evals:
+            _plot_success(axes[0][1], evals)
         steps = [r["step"] for r in train]
         ax.plot(steps, [r["train/loss"] for r in train], label="train loss", color="#2f7ebc")
         for key in sorted({k for r in train for k in r if k.startswith("train/") and k.endswith("_loss")}):
@@ -386,6 +391,25 @@ def plot_losses(records: list[dict[str, Any]], path: Path, title: str) -> Path |
     finally:
         plt.close(fig)
     return path
+
+
+def _plot_success(ax: Any, evals: list[dict[str, Any]]) -> None:
+    """The evaluations' success rate (percent) against the step, with 95% interval bars."""
+    steps = [r["step"] for r in evals]
+    rate = [r["eval/success_rate"] for r in evals]
+    low = [r["eval/success_rate"] - r.get("eval/ci95_low", r["eval/success_rate"]) for r in evals]
+    high = [r.get("eval/ci95_high", r["eval/success_rate"]) - r["eval/success_rate"] for r in evals]
+    ax.errorbar(steps, rate, yerr=[low, high], fmt="o-", capsize=3, color="#3a9a5b", label="success (95% CI)")
+    if all("eval/train_seconds" in r for r in evals):  # training minutes under each point
+        for step, value, r in zip(steps, rate, evals, strict=True):
+            ax.annotate(f"{r['eval/train_seconds'] / 60:.0f} min", (step, value), fontsize=6, xytext=(3, -9),
+                        textcoords="offset points")  # fmt: skip
+    ax.set_ylim(-2, 102)
+    ax.set_xlabel("step")
+    ax.set_ylabel("success rate (%)")
+    ax.set_title("evaluation", fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
 
 
 def provenance() -> dict[str, Any]:

@@ -496,6 +496,9 @@ def test_evaluation_under_upstream_s_protocol_starts_from_the_run_s_held_out_epi
     assert [r["step"] for r in evals] == [2, 4]
     seconds = [r["eval/train_seconds"] for r in evals]
     assert 0.0 < seconds[0] < seconds[1] < result.seconds
+    # loss.png gains a panel: the success rate against the step (11 inches wide at 120 dpi instead of 6)
+    assert int.from_bytes((result.folder / "loss.png").read_bytes()[16:20], "big") == 11 * 120
+    assert int.from_bytes((fit("lewm", "plain", steps=2).folder / "loss.png").read_bytes()[16:20], "big") == 6 * 120
     best = json.loads((result.folder / "best" / "protocol.json").read_text())["best"]
     assert best["episodes"] == 3 and len(best["starts"]) == 3
     for episode, start in best["starts"]:
