@@ -276,7 +276,7 @@ def train_cmd(
         typer.Option(
             "--preset",
             metavar="PRESET",
-            help="Sizes and recipe: tiny (CPU, minutes), cpu (LeWM on a CPU, under an hour), small (GPU), "
+            help="Sizes and recipe: tiny (CPU, minutes), cpu (LeWM, PLDM on a CPU, under an hour), small (GPU), "
             "paper (upstream's).",
         ),
     ] = "tiny",

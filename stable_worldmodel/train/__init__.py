@@ -34,7 +34,7 @@ def _positive(name: str, value: Any) -> int | None:
 TRAIN_KEY_HELP: dict[str, str] = {
     "model": "The model to train (a name of wm.list_models(); swm train's MODEL).",
     "dataset": "Dataset in the cache to train on (a frame decoder defaults to its source run's).",
-    "preset": "Sizes and recipe: tiny (CPU, minutes), cpu (LeWM: the Push-T recipe for a CPU, under an hour), "
+    "preset": "Sizes and recipe: tiny (CPU, minutes), cpu (LeWM, PLDM: the Push-T recipes for a CPU, under an hour), "
     "small (one GPU) or paper (upstream's).",
     "steps": "Optimizer steps (default: the preset's); on --resume, a larger value extends the run.",
     "epochs": "Passes over the train samples, instead of steps.",
@@ -115,8 +115,8 @@ def train(
 ) -> TrainResult:
     """Train world model ``model`` (a name of ``stable_worldmodel.wm.list_models()``) on dataset ``dataset``.
 
-    ``preset`` picks sizes and recipe (``tiny``, ``small``, ``paper``; LeWM also ``cpu``); ``overrides`` set any
-    config field (``frameskip=5``, ``embed_dim=32`` ...; ``train("frame", None, source=RUN)``
+    ``preset`` picks sizes and recipe (``tiny``, ``small``, ``paper``; LeWM and PLDM also ``cpu``); ``overrides``
+    set any config field (``frameskip=5``, ``embed_dim=32`` ...; ``train("frame", None, source=RUN)``
     trains a frame decoder on RUN's latents and dataset, as run ``RUN-frame``). ``steps`` or ``epochs`` (passes over
     the train samples) bound the run (default: the preset's steps). The model, its config and
     ``protocol.json`` go to ``<cache>/checkpoints/<name>/`` (default name ``<dataset>-<model>``),

@@ -155,3 +155,18 @@ def test_lewm_cpu_preset_is_the_push_t_recipe():
     assert tree["predictor"]["num_frames"] == 3 and tree["encoder"]["dims"] == [0, 1, 2, 3, 4]
     with pytest.raises(ConfigError, match="Did you mean 'cpu'"):
         wm.get_config("lewm", "cpuu")
+
+
+def test_pldm_cpu_preset_is_its_push_t_recipe():
+    """PLDM's ``--preset cpu``: the tiny sizes with a history of 3 and D=128 for 10000 steps (docs/results)."""
+    tiny, cpu = wm.get_config("pldm", "tiny"), wm.get_config("pldm", "cpu")
+    assert (cpu.history_size, cpu.embed_dim, cpu.steps) == (3, 128, 10000)
+    assert (tiny.history_size, tiny.embed_dim) != (3, 128)
+    assert (cpu.encoder, cpu.cnn_width, cpu.depth, cpu.loss_weights) == (
+        tiny.encoder,
+        tiny.cnn_width,
+        tiny.depth,
+        tiny.loss_weights,
+    )
+    assert wm.get_config("pldm", "cpu", steps=20).steps == 20
+    assert wm.get_config("pldm", "cpu").target_tree(2)["predictor"]["num_frames"] == 3
