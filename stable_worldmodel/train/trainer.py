@@ -230,6 +230,11 @@ class Trainer:
         self._seconds_before = 0.0
         self._fit_start: float | None = None
         self._eval_spent = 0.0
+        #: read the next train batch in a background thread while this step computes (None: when it pays,
+        #: see :meth:`_prefetching`); the batches, and so the weights, are those of a run without it
+        self.prefetch: bool | None = None
+        self._pending: Any = None  # (future of the next batch, generator state before its draws, batch size)
+        self._pool: Any = None
         self.window: list[
             Any
         ] = []  # train losses (floats or 0-d tensors) since the last log (checkpointed, for exact resume)
@@ -246,7 +251,7 @@ class Trainer:
             "scheduler": self.scheduler.state_dict(),
             "scaler": self.scaler.state_dict(),
             "step": self.step,
-            "rng": rng_state(self.generator),
+            "rng": rng_state(self._generator_at_step()),
             "steps": self.steps,
             "loss_window": [float(v) for v in self.window],
             "best_eval": self.best_eval,
@@ -331,9 +336,49 @@ class Trainer:
             self._collapse_warned = True
         return out
 
+    # -- batches -------------------------------------------------------------------------------
+    def _prefetching(self) -> bool:
+        """Whether the next batch is read while a step computes: single process, no per-step hook
+        (online training adds data there), not from cached features (already in memory)."""
+        if self.ddp is not None or self.before_step is not None:
+            return False
+        if self.prefetch is not None:
+            return bool(self.prefetch)
+        return getattr(self.data, "features", None) is None
+
+    def _next_batch(self, bs: int) -> dict[str, torch.Tensor]:
+        """This step's batch: the one read in the background during the last step, or read now;
+        then the next one is started. Both draw from :attr:`generator` in the same order."""
+        if self._pending is not None and self._pending[2] == bs:
+            future, _, _ = self._pending
+            self._pending = None
+            batch = future.result()
+        else:
+            self._drain()
+            batch = self.data.train_batch(self.generator, bs)
+        if self._pool is not None and self.step + 1 < self.steps:
+            before = self.generator.get_state()
+            self._pending = (self._pool.submit(self.data.train_batch, self.generator, bs), before, bs)
+        return batch
+
+    def _drain(self) -> None:
+        """Wait for a batch read in the background and forget it, its draws undone: the generator is
+        where the steps taken left it (before validation, checkpoints, evaluations and at the end)."""
+        if self._pending is None:
+            return
+        future, before, _ = self._pending
+        self._pending = None
+        with contextlib.suppress(Exception):  # its error, if any, comes back when the batch is read again
+            future.result()
+        self.generator.set_state(before)
+
+    def _generator_at_step(self) -> torch.Generator:
+        self._drain()
+        return self.generator
+
     def _train_step_loss(self, bs: int) -> dict[str, torch.Tensor]:
         if self.ddp is None:
-            batch = self.data.train_batch(self.generator, bs)
+            batch = self._next_batch(bs)
             with self._autocast():
                 return self.model.loss(batch)
         index = self.dist.shard(self.data.train_pick(self.generator, bs))  # same global pick everywhere
@@ -346,6 +391,7 @@ class Trainer:
     def validate(self) -> float | None:
         if not self.dist.is_main:
             return None
+        self._drain()  # the dataset's block cache is not shared with a reading thread
         batches = self.data.val_batches(self.cfg.batch_size, self.val_samples)
         if not batches:
             return None
@@ -369,6 +415,10 @@ class Trainer:
         self.model.train()
         start, start_step = time.perf_counter(), self.step
         self._fit_start, self._eval_spent = start, 0.0
+        if self._prefetching():
+            from concurrent.futures import ThreadPoolExecutor
+
+            self._pool = ThreadPoolExecutor(1, thread_name_prefix=f"swm-batches-{self.run}")
         logged = log.read()  # a resumed run's records up to its step (a finished run has no step left to log)
         last_loss = next((r["train/loss"] for r in reversed(logged) if "train/loss" in r), float("nan"))
         val_loss = next((r["val/loss"] for r in logged if "val/loss" in r and r.get("step") == self.step), None)
@@ -453,6 +503,10 @@ class Trainer:
                 exc.swm_run = (self.run, self.folder, self.step, self.steps, False)
             raise
         finally:
+            self._drain()
+            if self._pool is not None:
+                self._pool.shutdown()
+                self._pool = None
             stop.restore()
             bar.close()
         if val_loss is None:

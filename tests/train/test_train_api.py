@@ -69,12 +69,13 @@ class Crash(Exception):
 
 
 def crash_after(monkeypatch, batches: int) -> None:
-    """Make training raise :class:`Crash` when it asks for batch number ``batches + 1``."""
-    draw, calls = TrainData.train_batch, []
+    """Make training raise :class:`Crash` when it asks for batch number ``batches + 1`` (counted by the
+    generator state it is drawn from: a batch read ahead, dropped and read again counts once)."""
+    draw, seen = TrainData.train_batch, set()
 
     def train_batch(self, generator, batch_size):
-        calls.append(1)
-        if len(calls) > batches:
+        seen.add(bytes(generator.get_state().numpy()))
+        if len(seen) > batches:
             raise Crash
         return draw(self, generator, batch_size)
 
@@ -122,6 +123,29 @@ def test_resume_equals_an_uninterrupted_run(fit, monkeypatch, model, every, cras
     assert train_losses(folder) == train_losses(whole.folder)  # each logged step once, with the same loss
     assert [s for s, _ in train_losses(folder)] == logged
     assert resumed.train_loss == whole.train_loss and resumed.val_loss == whole.val_loss
+
+
+def test_the_next_batch_is_read_while_a_step_computes_and_changes_no_weight(fit, monkeypatch):
+    """A batch is read in a background thread during the step before it; validation and checkpoints in
+    between drop it and read it again: the weights are those of a run that reads every batch in its step."""
+    import threading
+
+    draw, in_main = TrainData.train_batch, []
+
+    def spy(self, generator, batch_size):
+        in_main.append(threading.current_thread() is threading.main_thread())
+        return draw(self, generator, batch_size)
+
+    monkeypatch.setattr(TrainData, "train_batch", spy)
+    kwargs = dict(steps=9, lr=3e-3, log_every=2, val_every=3, ckpt_every=4, dropout=0.1)
+    ahead = fit("lewm", "ahead", **kwargs)
+    assert in_main[0] and in_main.count(False) >= 5  # the first batch in the step, most of the others ahead
+    monkeypatch.setattr(trainer_module.Trainer, "_prefetching", lambda self: False)
+    in_main.clear()
+    inline = fit("lewm", "inline", **kwargs)
+    assert all(in_main) and len(in_main) == 9
+    assert_same_weights(weights(ahead.folder / "weights.pt"), weights(inline.folder / "weights.pt"))
+    assert train_losses(ahead.folder) == train_losses(inline.folder)
 
 
 def test_resume_of_a_finished_run_changes_nothing(fit):
