@@ -1,14 +1,15 @@
 """Success rate against training time, from ``swm eval --json`` records of runs and of their snapshots.
 
-Usage: python bench/pusht_curves.py EVAL.json [EVAL.json ...] [--out curves.png] [--line LABEL=PERCENT ...]
+Usage: python bench/pusht_curves.py [EVAL.json ...] [--run RUN ...] [--out curves.png] [--line LABEL=PERCENT ...]
                                     [--label RUN=TEXT ...]
 
 Each record's policy is ``wm:RUN`` (the run's last checkpoint) or ``wm:RUN/step_N`` (a snapshot ``swm train``
 keeps every quarter of a run); records of other policies (``random``, ``expert``) become horizontal lines, as do
 ``--line`` values (e.g. the ceiling ``bench/bench_pusht_oracle.py`` prints). The training time of a checkpoint is its
 step over the run's steps times the run's training time (``protocol.json``'s provenance: start to end): the runs
-train at a steady pace. A run evaluated during training with ``swm train --eval-every K --eval-protocol upstream``
-has the same curve in its ``metrics.jsonl`` (``eval/train_seconds``) and ``loss.png``, without this script.
+train at a steady pace. ``--run RUN`` adds the evaluations a run made as it trained (``swm train --eval-every K
+--eval-protocol upstream``: ``eval/success_rate`` at ``eval/train_seconds`` in its ``metrics.jsonl``; its
+``loss.png`` shows them too).
 
 Snapshots of one long run are taken at a learning rate its cosine schedule has not yet lowered: a run planned for
 that shorter time ends annealed, so the curve of snapshots is a lower bound of what such a run reaches.
@@ -41,7 +42,8 @@ def _run_seconds(run: str) -> tuple[int, float]:
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("records", nargs="+", type=Path)
+    parser.add_argument("records", nargs="*", type=Path)
+    parser.add_argument("--run", action="append", default=[], help="a run evaluated as it trained")
     parser.add_argument("--out", type=Path, default=Path("curves.png"))
     parser.add_argument("--line", action="append", default=[], metavar="LABEL=PERCENT")
     parser.add_argument("--label", action="append", default=[], metavar="RUN=TEXT", help="legend text of a run")
@@ -64,6 +66,13 @@ def main() -> int:
         steps, seconds = _run_seconds(run)
         step = int(match[2]) if match[2] else steps
         series.setdefault(run, []).append((seconds * step / steps / 60, step, rate, low, high))
+    for run in args.run:
+        metrics = _home() / "checkpoints" / run / "metrics.jsonl"
+        for line in metrics.read_text().splitlines():
+            r = json.loads(line)
+            if "eval/success_rate" in r and "eval/train_seconds" in r:
+                point = (r["eval/train_seconds"] / 60, r["step"], r["eval/success_rate"])
+                series.setdefault(run, []).append((*point, r["eval/ci95_low"], r["eval/ci95_high"]))
     if len(starts) > 1:
         print(f"warning: the records start from {len(starts)} different sets of starts")
 
