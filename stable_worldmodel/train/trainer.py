@@ -14,6 +14,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import math
+import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -313,9 +314,17 @@ class Trainer:
                 "eval/train_seconds": trained,
             }
         )
-        logger.info(
-            "step %d: success %.1f%% [%.1f, %.1f] on %d episodes", self.step, rate, low, high, result["episodes"]
+        line = (
+            f"train {self.run}: step {self.step}/{self.steps}, evaluation: success {rate:.1f}% [{low:.1f}, {high:.1f}] "
+            f"on {result['episodes']} episodes"
         )
+        if self.progress:  # above the progress bar
+            from tqdm.auto import tqdm
+
+            tqdm.write(line, file=sys.stderr)
+        else:  # beside the heartbeat's lines
+            sys.stderr.write(line + "\n")
+            sys.stderr.flush()
         if self.best_eval is None or rate > self.best_eval:
             self.best_eval = rate
             protocol = {**self.protocol, "steps_done": self.step, "best": {"step": self.step, **result}}

@@ -498,7 +498,7 @@ def test_evaluation_during_training_logs_success_keeps_the_best_and_changes_no_w
         fit("lewm", "bad", steps=2, eval_every=0)
 
 
-def test_evaluation_under_upstream_s_protocol_starts_from_the_run_s_held_out_episodes(fit, _stablewm_home):
+def test_evaluation_under_upstream_s_protocol_starts_from_the_run_s_held_out_episodes(fit, _stablewm_home, capsys):
     """``eval_protocol="upstream"``: each evaluation runs what ``swm eval --protocol upstream`` runs (goal 25
     steps on, budget 50, seed 42), from the run's validation episodes; ``eval/train_seconds`` grows with
     the steps and leaves the evaluations out."""
@@ -518,6 +518,10 @@ def test_evaluation_under_upstream_s_protocol_starts_from_the_run_s_held_out_epi
     assert protocol["evaluation"]["protocol"] == "upstream"
     evals = [r for r in result.history if "eval/success_rate" in r]
     assert [r["step"] for r in evals] == [2, 4]
+    said = [line for line in capsys.readouterr().err.splitlines() if "evaluation: success" in line]
+    assert [line.split(",")[0] for line in said] == ["train proto: step 2/4", "train proto: step 4/4"]
+    assert said[0].endswith(f"success {evals[0]['eval/success_rate']:.1f}% [{evals[0]['eval/ci95_low']:.1f}, "
+                            f"{evals[0]['eval/ci95_high']:.1f}] on 3 episodes")  # fmt: skip
     seconds = [r["eval/train_seconds"] for r in evals]
     assert 0.0 < seconds[0] < seconds[1] < result.seconds
     # loss.png gains a panel: the success rate against the step (11 inches wide at 120 dpi instead of 6)
