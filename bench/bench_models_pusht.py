@@ -74,7 +74,9 @@ def main() -> None:
     parser.add_argument("--models", nargs="+", default=["lewm", "pldm", "gcbc"])
     parser.add_argument("--episodes", type=int, default=1000, help="weak-policy episodes to collect")
     parser.add_argument("--steps", type=int, default=None, help="training steps (default: each preset's)")
-    parser.add_argument("--preset", default="tiny", help="the models' preset (cpu: LeWM's Push-T recipe for a CPU)")
+    parser.add_argument(
+        "--preset", default="tiny", help="the models' preset (cpu: LeWM's and PLDM's Push-T recipes for a CPU)"
+    )
     parser.add_argument("--num-envs", type=int, default=10)
     parser.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE", help="config overrides for every model")
     parser.add_argument("--keep", action="store_true", help="use $STABLEWM_HOME instead of a scratch folder")
@@ -117,7 +119,8 @@ def main() -> None:
         print(f"| {' | '.join(rows[-1])} |", flush=True)
     print(
         f"\n{ENV}, upstream's protocol ({floor['protocol_name']}: 50 held-out starts of {DATASET}, goal +25 steps, "
-        f"budget 50); {args.episodes} weak-policy episodes collected in {collect:.0f} s; tiny presets; this machine"
+        f"budget 50); {args.episodes} weak-policy episodes collected in {collect:.0f} s; preset {args.preset}; "
+        "this machine"
     )
     far = [f"goal +{args.harder}"] if args.harder else []
     print("| " + " | ".join(["policy", "training", "success (95% CI)", *far, "time"]) + " |")
