@@ -18,9 +18,9 @@ class LeWMConfig(JEPAConfig):
     Presets: ``tiny`` (64x64, CNN, D=64, 2 predictor layers: trains on a laptop CPU in
     minutes; SIGReg weight 0.01 and 256 directions: on TwoRoom, 0.09 made the latent distance
     to a far goal say little about the true one and CEM reached 30% of goals, 0.01 reached
-    53-67%, 0.003 20%), ``cpu`` (the tiny sizes with a history of 3 frames, D=128, SIGReg at
-    0.09, 12000 steps: the Push-T recipe for a 2-core CPU, ~40 minutes on one thread; with
-    ``encoder=state`` it is the state-input recipe), ``small`` (64x64, a 6-layer ViT with patch
+    53-67%, 0.003 20%), ``cpu`` (the tiny sizes with a CNN of width 16, a history of 3
+    frames, D=128, SIGReg at 0.09, 17500 steps: the Push-T recipe for a 2-core CPU, ~52 minutes
+    on both cores; with ``encoder=state`` it is the state-input recipe), ``small`` (64x64, a 6-layer ViT with patch
     8, D=192: a GPU in an hour) and
     ``paper`` (upstream's recipe: ViT-tiny patch 14 at 224x224, predictor depth 6 with 16
     heads, projectors of width 2048, batch 128, lr 5e-5).
@@ -30,7 +30,7 @@ class LeWMConfig(JEPAConfig):
     target: ClassVar[str] = "stable_worldmodel.wm.lewm.LeWM"
     presets: ClassVar[dict[str, dict[str, Any]]] = {
         "tiny": {"sigreg_num_proj": 256, "sigreg_weight": 0.01},
-        "cpu": {"sigreg_num_proj": 256, "history_size": 3, "embed_dim": 128, "steps": 12000},
+        "cpu": {"sigreg_num_proj": 256, "history_size": 3, "embed_dim": 128, "cnn_width": 16, "steps": 17500},
         "small": {
             "encoder": "vit",
             "vit_size": "tiny",
