@@ -502,6 +502,10 @@ def _train_locked(
             raise ConfigError(
                 f"train(eval_every=...) requires an env to evaluate in: dataset {dataset!r} records none; pass eval_env"
             )
+        if episodes is None:  # 10, or the protocol's number of starts
+            from ..cli.evaluation import protocol_knobs
+
+            episodes = protocol_knobs(eval_protocol, env)["episodes"] if eval_protocol is not None else 10
         from functools import partial
 
         trainer.evaluator = partial(

@@ -492,7 +492,8 @@ def test_evaluation_during_training_logs_success_keeps_the_best_and_changes_no_w
         assert 0.0 <= r["eval/ci95_low"] <= r["eval/success_rate"] <= r["eval/ci95_high"] <= 100.0
     best = json.loads((evaluated.folder / "best" / "protocol.json").read_text())["best"]
     assert best["step"] == max(evals, key=lambda r: r["eval/success_rate"])["step"]
-    assert json.loads((evaluated.folder / "protocol.json").read_text())["evaluation"]["env"] == "swm/Toy-v0"
+    recorded = json.loads((evaluated.folder / "protocol.json").read_text())["evaluation"]
+    assert (recorded["env"], recorded["episodes"]) == ("swm/Toy-v0", 2)
     world_model_policy("evaluated/best")  # swm eval --policy wm:evaluated/best plans with it
     with pytest.raises(ConfigError, match="eval_every"):
         fit("lewm", "bad", steps=2, eval_every=0)
@@ -515,7 +516,7 @@ def test_evaluation_under_upstream_s_protocol_starts_from_the_run_s_held_out_epi
         eval_plan=quick,
     )  # fmt: skip
     protocol = json.loads((result.folder / "protocol.json").read_text())
-    assert protocol["evaluation"]["protocol"] == "upstream"
+    assert protocol["evaluation"]["protocol"] == "upstream" and protocol["evaluation"]["episodes"] == 3
     evals = [r for r in result.history if "eval/success_rate" in r]
     assert [r["step"] for r in evals] == [2, 4]
     said = [line for line in capsys.readouterr().err.splitlines() if "evaluation: success" in line]
