@@ -32,12 +32,13 @@ def main() -> int:
     import torch
 
     torch.set_num_threads(args.threads)
+    from stable_worldmodel.data import get_cache_dir
     from stable_worldmodel.train import train
     from stable_worldmodel.train.trainer import Trainer
     from stable_worldmodel.wm.config import parse_override
 
     overrides = dict(parse_override(item) for item in args.set)
-    home = os.environ.get("STABLEWM_HOME")
+    home = str(get_cache_dir())
     auto = Trainer._prefetching
     rates: dict[str, list[float]] = {"prefetch": [], "inline": []}
     for _ in range(args.repeats):
@@ -46,7 +47,7 @@ def main() -> int:
             with tempfile.TemporaryDirectory() as out:
                 os.makedirs(os.path.join(out, "checkpoints"))
                 for name in (args.dataset, f"{args.dataset}.h5"):  # the dataset stays where it is
-                    src = os.path.join(home or os.path.expanduser("~/.stable_worldmodel"), name)
+                    src = os.path.join(home, name)
                     if os.path.exists(src):
                         os.symlink(src, os.path.join(out, name))
                 result = train(

@@ -23,18 +23,19 @@ from __future__ import annotations
 import argparse
 import datetime
 import json
-import os
 import re
 from pathlib import Path
 
 
-def _home() -> Path:
-    return Path(os.environ.get("STABLEWM_HOME", Path.home() / ".stable_worldmodel"))
+def _run_folder(run: str) -> Path:
+    from stable_worldmodel.wm.utils import checkpoint_root
+
+    return checkpoint_root() / run
 
 
 def _run_seconds(run: str) -> tuple[int, float]:
     """Planned steps and training seconds (provenance start to end) of checkpoint run ``run``."""
-    protocol = json.loads((_home() / "checkpoints" / run / "protocol.json").read_text())
+    protocol = json.loads((_run_folder(run) / "protocol.json").read_text())
     prov = protocol["provenance"]
     start, end = (datetime.datetime.fromisoformat(prov[k]) for k in ("started", "ended"))
     return int(protocol["steps"]), (end - start).total_seconds()
@@ -67,7 +68,7 @@ def main() -> int:
         step = int(match[2]) if match[2] else steps
         series.setdefault(run, []).append((seconds * step / steps / 60, step, rate, low, high))
     for run in args.run:
-        metrics = _home() / "checkpoints" / run / "metrics.jsonl"
+        metrics = _run_folder(run) / "metrics.jsonl"
         for line in metrics.read_text().splitlines():
             r = json.loads(line)
             if "eval/success_rate" in r and "eval/train_seconds" in r:
