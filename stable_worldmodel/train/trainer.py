@@ -231,10 +231,9 @@ class Trainer:
         self._seconds_before = 0.0
         self._fit_start: float | None = None
         self._eval_spent = 0.0
-        #: read the next train batch in a background thread while this step computes (None: when it pays,
-        #: see :meth:`_prefetching`); the batches, and so the weights, are those of a run without it
-        self.prefetch: bool | None = None
-        self._pending: Any = None  # (future of the next batch, generator state before its draws, batch size)
+        # the next train batch, read in a background thread while a step computes (see :meth:`_prefetching`):
+        # (its future, the generator state before its draws, its batch size)
+        self._pending: Any = None
         self._pool: Any = None
         self.window: list[
             Any
@@ -351,8 +350,6 @@ class Trainer:
         (online training adds data there), not from cached features (already in memory)."""
         if self.ddp is not None or self.before_step is not None:
             return False
-        if self.prefetch is not None:
-            return bool(self.prefetch)
         return getattr(self.data, "features", None) is None
 
     def _next_batch(self, bs: int) -> dict[str, torch.Tensor]:
