@@ -64,30 +64,32 @@ class Attention(nn.Module):
         return x.view(b, t, self.heads, self.dim_head).transpose(1, 2)
 
     def forward(self, x: torch.Tensor, causal: bool = True) -> torch.Tensor:
-        b, t, _ = x.shape
         p = self.dropout if self.training else 0.0
-        if t == 1 and p == 0.0:  # one token attends to itself with weight 1: only its values are needed
+        if x.shape[1] == 1 and p == 0.0:  # one token attends to itself with weight 1: only its values are needed
             inner = self.heads * self.dim_head
             return self.to_out(F.linear(self.norm(x), self.to_qkv.weight[2 * inner :]))
         q, k, v = self.to_qkv(self.norm(x)).chunk(3, dim=-1)
+        return self._attend(q, k, v, causal)
+
+    def _attend(self, q: torch.Tensor, k: torch.Tensor, v: torch.Tensor, causal: bool) -> torch.Tensor:
+        """Multi-head attention of queries ``q (B, Tq, inner)`` over ``k, v (B, T, inner)``, projected out."""
+        b, tq, _ = q.shape
+        p = self.dropout if self.training else 0.0
         out = F.scaled_dot_product_attention(
             self._heads(q), self._heads(k), self._heads(v), dropout_p=p, is_causal=causal
         )
-        return self.to_out(out.transpose(1, 2).reshape(b, t, self.heads * self.dim_head))
+        return self.to_out(out.transpose(1, 2).reshape(b, tq, self.heads * self.dim_head))
 
     def forward_last(self, x: torch.Tensor) -> torch.Tensor:
         """The last row of ``forward(x, causal=True)``: ``(B, T, dim) -> (B, 1, dim)``; the last token
         attends to every token, so only its query is computed."""
-        b, t, _ = x.shape
-        if t == 1:
+        if x.shape[1] == 1:
             return self(x)
         inner = self.heads * self.dim_head
         h = self.norm(x)
         q = F.linear(h[:, -1:], self.to_qkv.weight[:inner])
         k, v = F.linear(h, self.to_qkv.weight[inner:]).chunk(2, dim=-1)
-        p = self.dropout if self.training else 0.0
-        out = F.scaled_dot_product_attention(self._heads(q), self._heads(k), self._heads(v), dropout_p=p)
-        return self.to_out(out.transpose(1, 2).reshape(b, 1, inner))
+        return self._attend(q, k, v, causal=False)
 
 
 def _modulate(x: torch.Tensor, shift: torch.Tensor, scale: torch.Tensor) -> torch.Tensor:
@@ -215,10 +217,14 @@ class Predictor(nn.Module):
         )
 
     def forward(self, x: torch.Tensor, c: torch.Tensor) -> torch.Tensor:
+        return self.transformer(self._positioned(x), c)
+
+    def _positioned(self, x: torch.Tensor) -> torch.Tensor:
+        """``x`` plus the learned positions of its ``T <= num_frames`` frames (then embedding dropout)."""
         t = x.shape[1]
         if t > self.num_frames:
             raise ValueError(f"Predictor requires at most num_frames={self.num_frames} frames, got {t}")
-        return self.transformer(self.dropout(x + self.pos_embedding[:, :t]), c)
+        return self.dropout(x + self.pos_embedding[:, :t])
 
     # -- open-loop rollouts: the actions' modulation computed once, only the last output ---------------
     def condition(self, c: torch.Tensor) -> list[torch.Tensor]:
@@ -231,11 +237,8 @@ class Predictor(nn.Module):
     def forward_last(self, x: torch.Tensor, mods: list[torch.Tensor]) -> torch.Tensor:
         """The last output of ``forward(x, c)``, ``(B, output_dim)``, from ``mods``: :meth:`condition`
         of ``c``, sliced to ``x``'s frames. The last block computes the last token only."""
-        t = x.shape[1]
-        if t > self.num_frames:
-            raise ValueError(f"Predictor requires at most num_frames={self.num_frames} frames, got {t}")
         tr = self.transformer
-        x = tr.input_proj(self.dropout(x + self.pos_embedding[:, :t]))
+        x = tr.input_proj(self._positioned(x))
         last = len(tr.layers) - 1
         for i, (block, mod) in enumerate(zip(tr.layers, mods, strict=True)):
             x = block.modulated(x, mod, last=i == last)
