@@ -8,8 +8,9 @@ and, after the writer was killed, would keep refusing it (``h5clear`` clears the
 :class:`SealedFile` is the file the writer hands to HDF5 (h5py's file-object driver): every
 write passes through it, and the superblock reaches the disk without the flags and with an
 EOA equal to the file's size, so the file is a valid, closed-looking HDF5 file between any
-two of its system calls. :func:`repair` clears the flags of a file left by a killed writer
-of an earlier version (which sealed the file after each commit instead). Superblock
+two of its system calls (a write a kill cuts inside is kept in a redo record first, see
+:mod:`._redo`). :func:`repair` completes such a write, and clears the flags of a file left by
+a killed writer of an earlier version (which sealed the file after each commit instead). Superblock
 version 2/3 layout (all little endian)::
 
     offset  size  field
@@ -154,8 +155,22 @@ def seal(path: str | os.PathLike) -> bool:
 
 
 def repair(path: str | os.PathLike) -> bool:
-    """Make a file left by a killed writer of an older version openable by plain h5py; True if it changed it."""
-    return needs_repair(path) and seal(path)
+    """Make a file left by a killed writer openable by plain h5py; True if it changed it.
+
+    Completes the in-place write a kill cut at a page boundary (see :mod:`._redo`; not while a
+    writer has the file open: the record is then that writer's), and clears the write flags an
+    older version left. Readers (:class:`~.hdf5.HDF5Dataset`) and writers do it on open.
+    """
+    from ._redo import complete_unless_written
+
+    completed = complete_unless_written(path)
+    return (needs_repair(path) and seal(path)) or completed
+
+
+def _redo_log(path: str | os.PathLike, fd: int):
+    from ._redo import RedoLog
+
+    return RedoLog(path, fd)
 
 
 class SealedFile:
@@ -171,6 +186,11 @@ class SealedFile:
       truncations only grow the file while it is open (:meth:`close` trims it). A reader checks
       the size against an EOA it reads a moment later, and trusts no address past that EOA;
       the slack keeps both true while the writer appends.
+
+    A kill can also land *inside* a system call: the kernel stops copying a write at a page
+    boundary. A write over bytes already written that spans pages (HDF5 rewrites metadata in
+    place) is therefore recorded first (:class:`._redo.RedoLog`, once the file has its name:
+    :meth:`publish`), and :func:`repair` completes it.
 
     h5py's driver does not recover from an exception raised here (later calls fail and the
     process may crash), so no method raises: the first failure (``ENOSPC``, ``KeyboardInterrupt``
@@ -190,6 +210,8 @@ class SealedFile:
         self._head: bytearray | None = None  # the superblock as HDF5 last wrote it
         self._eoa = 0  # HDF5's end of allocation, as it last told us
         self._trim: int | None = None  # the size HDF5 last truncated to (applied by close)
+        self._written = 0 if create else self._size  # bytes below this may be in use: writes there are in place
+        self._redo = None if create else _redo_log(path, self._fd)  # a new file gets one once published
         head = os.pread(self._fd, 64, 0)
         if _known(head):
             self._head = bytearray(head[: 16 + 4 * head[9]])
@@ -241,7 +263,7 @@ class SealedFile:
             else:
                 if pos + n > self._size:
                     self._grow(pos + n)
-                self._pwrite(view, pos)
+                self._put(view, pos)
             return n
         except BaseException as exc:  # noqa: BLE001
             self._fail(exc)
@@ -270,12 +292,20 @@ class SealedFile:
         if self._fh.closed:
             return
         try:
+            if self._redo is not None:  # HDF5 finished every write (unless one failed: then it may be needed)
+                self._redo.close(remove=self._live)
             trim = self._trim
             if self._live and self._head is not None and trim is not None and self._eoa <= trim < self._size:
                 self._pwrite(memoryview(_stamp(self._head, trim)), 0)  # the EOA never passes the end
                 self._ftruncate(trim)
         finally:
             self._fh.close()
+
+    def publish(self) -> None:
+        """The file now has its name (a new file is renamed once valid): keep a redo record of its
+        in-place writes from here on (see :mod:`._redo`)."""
+        if self._redo is None:
+            self._redo = _redo_log(self.name, self._fd)
 
     def detach(self) -> None:
         """Drop every later change: the file belongs to another process (this one is a fork)."""
@@ -292,6 +322,14 @@ class SealedFile:
             done = os.pwrite(self._fd, view, pos)
             view, pos = view[done:], pos + done
 
+    def _put(self, view: memoryview, pos: int) -> None:
+        """Write HDF5's bytes; one landing on bytes already written is recorded first, in case a
+        kill cuts it (see :mod:`._redo`)."""
+        if self._redo is not None and pos < self._written:
+            self._redo.before(view, pos)
+        self._pwrite(view, pos)
+        self._written = max(self._written, pos + len(view))
+
     def _ftruncate(self, size: int) -> None:
         os.ftruncate(self._fd, size)
         self._size = size
@@ -304,7 +342,7 @@ class SealedFile:
         if len(view) > k:  # metadata written along with the superblock goes first
             if pos + len(view) > self._size:
                 self._ftruncate(pos + len(view) + SLACK)
-            self._pwrite(view[k:], pos + k)
+            self._put(view[k:], pos + k)
         self._restamp()
 
     def _grow(self, end: int) -> None:

@@ -31,7 +31,7 @@ import numpy as np
 
 from .. import keys
 from ..errors import ConfigError, DatasetFormatError
-from . import _rowsum, _superblock
+from . import _redo, _rowsum, _superblock
 from ._index import H5_READ_ERRORS, check_file, damaged, read_index
 from .dataset import Dataset
 from .utils import resolve_dataset_path
@@ -150,11 +150,15 @@ def open_h5(path: str | os.PathLike):
     _register_filters()
     if _superblock.cut_in_superblock(path):  # nothing can read it: skip HDF5's read attempts
         raise damaged("HDF5Dataset", Path(path), "no complete superblock")
-    if _superblock.needs_repair(path):
+    if _superblock.needs_repair(path) or _redo.record_path(path).exists():
         try:
             _superblock.repair(path)
-        except OSError:  # read-only file: SWMR read still works
-            logger.warning("%s is flagged open for write and could not be repaired", path)
+        except OSError as exc:  # read-only file: a SWMR read of a flagged file still works
+            logger.warning(
+                "%s was left by a killed writer and could not be repaired (%s); open it once with write access",
+                path,
+                exc,
+            )
     # HDF5 shares a file opened twice in one process only with compatible flags: a later plain
     # h5py.File(path) joins a SWMR reader opened with default locking, not the other way round
     attempts = (

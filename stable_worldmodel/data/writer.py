@@ -21,9 +21,12 @@ Committed rows are immutable: no later write touches their bytes (see :func:`col
 so a kill can only lose the commit under way.
 
 Crash safety. A ``kill -9`` (or power-preserving crash of the process) at any moment leaves
-a file that plain ``h5py.File(path)`` opens, with default arguments and no repair step, and
-in which every episode whose :meth:`HDF5Writer.write_episodes` returned reads back exactly;
-the episodes of the call under way are committed entirely or not at all. How:
+a file that plain ``h5py.File(path)`` opens, with default arguments, and in which every episode
+whose :meth:`HDF5Writer.write_episodes` returned reads back exactly; the episodes of the call
+under way are committed entirely or not at all. The one exception: a kill that cuts one of
+HDF5's in-place metadata writes at a page boundary (see :mod:`._redo`) leaves the file for
+:func:`~._superblock.repair` to complete from its redo record, which the next
+:class:`~.hdf5.HDF5Dataset` or :class:`HDF5Writer` to open it does first. How:
 
 * HDF5 writes in SWMR mode (``libver='latest'``), which orders its metadata writes so that
   nothing on disk points at data not yet written;
@@ -34,7 +37,10 @@ the episodes of the call under way are committed entirely or not at all. How:
   end, which a resuming writer does not reclaim; :meth:`HDF5Writer.close` (or interpreter
   exit) trims it;
 * a new file is written as ``.<name>.partial`` and renamed once valid, so ``path`` never
-  holds a half-created file.
+  holds a half-created file;
+* a write over bytes already written that crosses a page boundary is first kept, with the
+  bytes it replaces, in ``.<name>.redo`` (:mod:`._redo`): the kernel may cut it there when a
+  kill arrives. Closing the writer removes the record.
 
 Not covered: the operating system crashing or losing power (nothing is fsync'ed).
 
@@ -65,7 +71,7 @@ import numpy as np
 
 from .. import keys
 from ..errors import ConfigError, DatasetFormatError
-from . import _checksum, _rowsum, _superblock
+from . import _checksum, _redo, _rowsum, _superblock
 from ._index import H5_READ_ERRORS, damaged, not_a_file, read_index
 from ._lock import WriterLock
 from .format import per_step_columns, validate_write_mode
@@ -267,6 +273,7 @@ class HDF5Writer:
                 )
             if self.path.exists() and mode == "overwrite":  # under the lock: no writer of it is running
                 self.path.unlink()
+                _redo.record_path(self.path).unlink(missing_ok=True)
             if self.path.exists():
                 self._resume()
             else:  # a first recording killed before its file was valid left this: it holds nothing
@@ -282,6 +289,8 @@ class HDF5Writer:
 
     # -- opening ------------------------------------------------------------------------------
     def _resume(self) -> None:
+        if _redo.complete(self.path):  # this writer holds the lock: no other has the file open
+            logger.warning("%s: completed the write a killed writer left cut in two", self.path)
         if _superblock.repair(self.path):
             logger.warning("%s was left open by a killed writer; cleared its write flags", self.path)
         try:
@@ -382,7 +391,9 @@ class HDF5Writer:
             self._schema, self._summed = {}, set()
             partial.unlink(missing_ok=True)
             raise
+        _redo.record_path(self.path).unlink(missing_ok=True)  # a record of a file once at this path
         os.replace(partial, self.path)
+        self._io.publish()
 
     def _open(self, fileobj: _superblock.SealedFile, mode: str):
         """Open HDF5 on ``fileobj``; closed (HDF5 first, then the descriptor) by :meth:`close` or at exit."""

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from stable_worldmodel import keys
-from stable_worldmodel.data import HDF5Dataset, _superblock
+from stable_worldmodel.data import HDF5Dataset, _redo, _superblock, repair
 from stable_worldmodel.data import writer as writer_module
 from stable_worldmodel.data.writer import NEXT_SEED_ATTR, HDF5Writer
 from stable_worldmodel.errors import DatasetFormatError
@@ -303,6 +303,52 @@ def test_every_state_between_two_system_calls_opens_plainly(tmp_path, monkeypatc
             assert _check_committed(f, synth) >= done, f"state {i}"
 
 
+def _opens_with_committed(path, synth) -> int | None:
+    """Committed episodes of ``path`` as plain h5py reads them; None if it cannot open it."""
+    try:
+        with h5py.File(path) as f:
+            return _check_committed(f, synth)
+    except (OSError, KeyError):  # h5py raises KeyError for an object whose header fails its checksum
+        return None
+
+
+def test_a_write_a_kill_cuts_at_a_page_boundary_is_completed_on_open(tmp_path, monkeypatch, synth):
+    """A kill during a ``pwrite`` of several pages stops the kernel's copy at a page boundary: the
+    file keeps the write's first pages and its old bytes after. HDF5 rewrites metadata in place
+    (object headers, chunk-index blocks), so such a state may not open; every one, once its redo
+    record is applied (``repair``, as readers and writers do on open), opens with every episode."""
+    path = tmp_path / "cut.h5"
+    states = []  # (file bytes, redo record bytes, episodes committed when the call returned)
+
+    class Recording(_superblock.SealedFile):
+        def _pwrite(self, view, pos):
+            if path.exists() and pos < self._written and _redo.spans_pages(pos, len(view)):
+                now = os.pread(self._fd, 1 << 30, 0)
+                record = _redo.record_path(path).read_bytes()
+                for cut in range(_redo.PAGE - pos % _redo.PAGE, len(view), _redo.PAGE):
+                    states.append((now[:pos] + bytes(view[:cut]) + now[pos + cut :], record, committed[0]))
+            super()._pwrite(view, pos)
+
+    monkeypatch.setattr(_superblock, "SealedFile", Recording)
+    committed = [0]
+    for session in (range(0, 30), range(30, 60)):  # create, then resume
+        with HDF5Writer(path) as w:
+            for ep in session:
+                w.write_episodes([synth(ep, _length(ep), IMAGE)], next_seed=ep + 1)
+                committed[0] += 1
+        assert not _redo.record_path(path).exists()  # a closed writer leaves no record
+    copy = tmp_path / "state.h5"
+    unopenable = 0
+    for i, (raw, record, done) in enumerate(states):
+        copy.write_bytes(raw)
+        unopenable += _opens_with_committed(copy, synth) is None
+        _redo.record_path(copy).write_bytes(record)
+        assert repair(copy), f"state {i}"
+        assert (_opens_with_committed(copy, synth) or 0) >= done, f"state {i}"
+        assert not _redo.record_path(copy).exists()
+    assert len(states) > 20 and unopenable > 0  # the cuts are real damage, which the record mends
+
+
 def test_sigkill_at_random_moments_keeps_every_committed_episode(tmp_path, synth):
     path = tmp_path / "killed.h5"
     rng = random.Random(0)
@@ -318,7 +364,8 @@ def test_sigkill_at_random_moments_keeps_every_committed_episode(tmp_path, synth
             assert seen == 0
             continue
         assert not _superblock.needs_repair(path)
-        with h5py.File(path) as f:  # plain h5py, default arguments, no repair
+        repair(path)  # completes a write the kill cut at a page boundary, as the next reader or writer does
+        with h5py.File(path) as f:  # plain h5py, default arguments
             count = _check_committed(f, synth)
         assert count >= seen  # the next child resumed after the last committed episode
         seen = count
