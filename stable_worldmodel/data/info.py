@@ -156,7 +156,8 @@ def delete_dataset(name: str) -> Path:
     for path in dataset_candidates(name):  # in the cache only: never a folder that a relative path names
         if path.is_file():
             path.unlink()
-            path.with_name(f".{path.name}.partial").unlink(missing_ok=True)
+            for leftover in ("partial", "redo"):  # a killed writer's unfinished file and redo record
+                path.with_name(f".{path.name}.{leftover}").unlink(missing_ok=True)
             logger.info("Deleted dataset %s", path)
             return path
         if path.is_dir():

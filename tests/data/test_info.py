@@ -19,8 +19,11 @@ def test_dataset_info_list_delete(make_h5):
     assert keys.STATE in info["columns"] and info["variation"]["has_variation"] is False
     with pytest.raises(ValueError, match="ds"):
         data.dataset_info("dz")
+    leftovers = [target.with_name(f".ds.h5.{kind}") for kind in ("partial", "redo")]  # a killed writer's
+    for leftover in leftovers:
+        leftover.write_bytes(b"x")
     assert data.delete_dataset("ds") == target
-    assert data.list_datasets() == []
+    assert data.list_datasets() == [] and not any(p.exists() for p in leftovers)
     with pytest.raises(KeyError):
         data.delete_dataset("ds")
 
