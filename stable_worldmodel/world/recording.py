@@ -18,6 +18,7 @@ import numpy as np
 
 from .. import keys
 from ..errors import ConfigError
+from .batching import stack
 
 logger = logging.getLogger(__name__)
 
@@ -59,7 +60,7 @@ def _finish_episode(rows: dict[str, list[np.ndarray]], ep_idx: int | None = None
     :data:`~stable_worldmodel.keys.EP_IDX` column.
     """
     length = max((len(v) for v in rows.values()), default=0)
-    episode = {k: np.stack(v) for k, v in rows.items() if len(v) == length}
+    episode = {k: stack(v) for k, v in rows.items() if len(v) == length}
     action = episode.get(keys.ACTION)
     if action is not None:
         action = action.astype(np.result_type(action.dtype, np.float32), copy=False)

@@ -28,7 +28,7 @@ from gymnasium.vector.utils import batch_space
 
 from ..errors import ConfigError, WorkerError
 from ._workers import WorkerPool, check_main_guard, get_context, guard_hint
-from .batching import concat_batches, stack_dicts
+from .batching import concat_batches, stack, stack_dicts
 from .shm import ShmReader, unpack_result
 
 __all__ = ["VecEnv", "EnvGroup", "WorkerError", "MODES"]
@@ -103,7 +103,7 @@ class EnvGroup:
 def _stack_obs(obs: list) -> Any:
     if obs and isinstance(obs[0], dict):
         return stack_dicts(obs)
-    return np.stack([np.asarray(o) for o in obs])
+    return stack([np.asarray(o) for o in obs])
 
 
 class VecEnv:
