@@ -168,13 +168,47 @@ def deflate_level(dset) -> int | None:
     return int(opts[0]) if code == h5py.h5z.FILTER_DEFLATE and opts else None
 
 
+PARALLEL_DEFLATE_BYTES = 1 << 20  # rows of a commit worth compressing on two threads
+
+
+class _Helper:
+    """One worker thread of this process (made again in a forked child, which has no threads)."""
+
+    pool = None
+    pid = None
+
+    @classmethod
+    def submit(cls, fn, *args):
+        if cls.pid != os.getpid():
+            from concurrent.futures import ThreadPoolExecutor
+
+            cls.pool, cls.pid = ThreadPoolExecutor(1, thread_name_prefix="swm-deflate"), os.getpid()
+        return cls.pool.submit(fn, *args)
+
+
+def _compress(rows: list, level: int) -> list[bytes]:
+    return [zlib.compress(row, level) for row in rows]
+
+
 def _deflate(rows: np.ndarray, level: int) -> list[bytes]:
     """One zlib stream per row (the format of HDF5's deflate filter); a row equal to the row
-    before it (an episode's goal image) shares that row's bytes instead of being compressed again."""
+    before it (an episode's goal image) shares that row's bytes instead of being compressed again.
+    A commit of at least :data:`PARALLEL_DEFLATE_BYTES` is compressed half here, half on a helper
+    thread (zlib releases the GIL): the same bytes, in about half the time on two cores."""
     flat = rows.reshape(len(rows), -1)
+    fresh = [i for i in range(len(flat)) if i == 0 or not np.array_equal(flat[i], flat[i - 1])]
+    todo = [flat[i] for i in fresh]
+    if len(todo) > 1 and len(todo) * flat.shape[1] * flat.itemsize >= PARALLEL_DEFLATE_BYTES:
+        half = len(todo) // 2
+        later = _Helper.submit(_compress, todo[half:], level)
+        packed = _compress(todo[:half], level) + later.result()
+    else:
+        packed = _compress(todo, level)
     out: list[bytes] = []
-    for i, row in enumerate(flat):
-        out.append(out[-1] if i and np.array_equal(row, flat[i - 1]) else zlib.compress(row, level))
+    stream = iter(packed)
+    new = set(fresh)
+    for i in range(len(flat)):
+        out.append(next(stream) if i in new else out[-1])
     return out
 
 

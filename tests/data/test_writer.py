@@ -539,6 +539,44 @@ def test_a_row_equal_to_the_one_before_is_compressed_once(tmp_path, synth, monke
         assert (f["goal"][:4] == f[keys.PIXELS][3]).all() and (f["goal"][4:] == f[keys.PIXELS][6]).all()
 
 
+def _deflate_in_child(rows, conn):  # pragma: no cover - runs in a forked child
+    conn.send(writer_module._deflate(rows, 4))
+    conn.close()
+
+
+def test_a_large_commit_is_compressed_on_two_threads_to_the_same_bytes(monkeypatch):
+    """Half the rows of a large commit are compressed by a helper thread: the chunks are the ones
+    a single thread makes, in order, repeated rows shared; a forked child gets a helper of its own."""
+    import threading
+    import zlib
+
+    rng = np.random.default_rng(0)
+    rows = rng.integers(0, 4, (9, 24, 24, 3), dtype=np.uint8)
+    rows[4] = rows[3]  # a repeated row, at the split
+    serial = [zlib.compress(r.tobytes(), 4) for r in rows]
+    serial[4] = serial[3]
+    threads = []
+    real = writer_module._compress
+
+    def compress(batch, level):
+        threads.append(threading.current_thread().name)
+        return real(batch, level)
+
+    monkeypatch.setattr(writer_module, "_compress", compress)
+    monkeypatch.setattr(writer_module, "PARALLEL_DEFLATE_BYTES", rows[0].nbytes * 2)
+    out = writer_module._deflate(rows, 4)
+    assert out == serial and out[4] is out[3]
+    assert sorted(name.startswith("swm-deflate") for name in threads) == [False, True]  # this thread and the helper
+    parent, child = multiprocessing.get_context("fork").Pipe()
+    proc = multiprocessing.get_context("fork").Process(target=_deflate_in_child, args=(rows, child))
+    proc.start()
+    assert parent.poll(30) and parent.recv() == serial
+    proc.join()
+    monkeypatch.setattr(writer_module, "PARALLEL_DEFLATE_BYTES", 1 << 60)
+    threads.clear()
+    assert writer_module._deflate(rows, 4) == serial and len(threads) == 1  # a small commit: one thread
+
+
 @pytest.mark.parametrize(
     ("storage", "level"),
     [
