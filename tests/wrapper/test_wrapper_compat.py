@@ -105,6 +105,32 @@ def test_stacked_get_buffer_data():
     torch.testing.assert_close(one.get_buffer_data("t"), info["t"])
 
 
+def test_stacked_history_one_adds_the_axis_to_every_kind():
+    """history_size=1, the default: an array gains a leading axis without a copy, other values
+    as with a longer history, and the buffer holds the newest value after a reset and each step."""
+
+    class Kinds(Mixed):
+        def step(self, action):
+            obs, r, te, tr, info = super().step(action)
+            return obs, r, te, tr, {**info, "a": self.frame, "f": np.float32(self.t)}
+
+        def reset(self, *, seed=None, options=None):
+            self.frame = np.zeros((2, 2), np.uint8)
+            obs, info = super().reset(seed=seed, options=options)
+            return obs, {**info, "a": self.frame, "f": np.float32(0)}
+
+    env = StackedWrapper(Kinds(), None)
+    _, info = env.reset(seed=0)
+    assert info["a"].shape == (1, 2, 2) and np.shares_memory(info["a"], env.unwrapped.frame)
+    for _ in range(2):
+        _, _, _, _, info = env.step(None)
+    assert info["n"].tolist() == [2] and info["n"].dtype == np.asarray(2).dtype
+    assert info["f"].tolist() == [2.0] and info["f"].dtype == np.float32
+    assert info["l"] == [[2, 1]] and torch.is_tensor(info["t"]) and info["t"].shape == (1, 1)
+    for key in ("n", "f", "a"):
+        np.testing.assert_array_equal(env.get_buffer_data(key), info[key])
+
+
 # -- EverythingToInfoWrapper ----------------------------------------------------------------------
 @pytest.mark.parametrize("key", ["reward", "terminated", "action", "step_idx", "id", "observation"])
 def test_everything_to_info_refuses_colliding_keys(key):
