@@ -196,8 +196,8 @@ def _deflate(rows: np.ndarray, level: int) -> list[bytes]:
     A commit of at least :data:`PARALLEL_DEFLATE_BYTES` is compressed half here, half on a helper
     thread (zlib releases the GIL): the same bytes, in about half the time on two cores."""
     flat = rows.reshape(len(rows), -1)
-    fresh = [i for i in range(len(flat)) if i == 0 or not np.array_equal(flat[i], flat[i - 1])]
-    todo = [flat[i] for i in fresh]
+    repeats = [i > 0 and np.array_equal(row, flat[i - 1]) for i, row in enumerate(flat)]
+    todo = [row for row, repeat in zip(flat, repeats, strict=True) if not repeat]
     if len(todo) > 1 and len(todo) * flat.shape[1] * flat.itemsize >= PARALLEL_DEFLATE_BYTES:
         half = len(todo) // 2
         later = _Helper.submit(_compress, todo[half:], level)
@@ -206,9 +206,8 @@ def _deflate(rows: np.ndarray, level: int) -> list[bytes]:
         packed = _compress(todo, level)
     out: list[bytes] = []
     stream = iter(packed)
-    new = set(fresh)
-    for i in range(len(flat)):
-        out.append(next(stream) if i in new else out[-1])
+    for repeat in repeats:
+        out.append(out[-1] if repeat else next(stream))
     return out
 
 
