@@ -46,3 +46,33 @@ def make_h5(tmp_path):
 def synth():
     """The :func:`synthetic_episode` factory."""
     return synthetic_episode
+
+
+@pytest.fixture
+def cut_writes(monkeypatch):
+    """``cut_writes(path, first_only=False)``: from then on, before each write of the HDF5 writers
+    over bytes of ``path`` already written that spans pages, record what a kill inside it can leave
+    (the kernel stops at a page boundary): ``(file bytes, redo record bytes)`` for each boundary,
+    appended to the returned list (only the first such state with ``first_only``)."""
+    import os
+
+    from stable_worldmodel.data import _redo, _superblock
+
+    def start(path, first_only=False):
+        states = []
+
+        class Cutting(_superblock.SealedFile):
+            def _pwrite(self, view, pos):
+                if path.exists() and pos < self._written and _redo.spans_pages(pos, len(view)):
+                    if not (first_only and states):
+                        now = os.pread(self._fd, 1 << 30, 0)
+                        record = _redo.record_path(path).read_bytes()
+                        cuts = range(_redo.PAGE - pos % _redo.PAGE, len(view), _redo.PAGE)
+                        for cut in cuts[:1] if first_only else cuts:
+                            states.append((now[:pos] + bytes(view[:cut]) + now[pos + cut :], record))
+                super()._pwrite(view, pos)
+
+        monkeypatch.setattr(_superblock, "SealedFile", Cutting)
+        return states
+
+    return start

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from stable_worldmodel import keys
-from stable_worldmodel.data import HDF5Dataset, _redo, _superblock, repair
+from stable_worldmodel.data import HDF5Dataset, _redo, repair
 from stable_worldmodel.data._lock import WriterLock
 from stable_worldmodel.data.writer import HDF5Writer
 
@@ -121,41 +121,27 @@ def test_one_page_writes_are_not_recorded(tmp_path, fds):
     assert _redo.spans_pages(PAGE - 1, 2) and not _redo.spans_pages(PAGE, PAGE) and not _redo.spans_pages(5, 0)
 
 
-def _cut_dataset(tmp_path, synth) -> tuple:
+def _cut_dataset(tmp_path, synth, cut_writes) -> tuple:
     """A dataset of 3 episodes plus the state a kill leaves when it cuts the writer's next in-place
     write of several pages (the file's bytes, its redo record); the file holds the cut state."""
     path = tmp_path / "cut.h5"
     with HDF5Writer(path) as w:
         for ep in range(3):
             w.write_episodes([synth(ep, 3, (24, 24))], next_seed=ep + 1)
-    cut = []
-
-    class Cutting(_superblock.SealedFile):
-        def _pwrite(self, view, pos):
-            if not cut and pos < self._written and _redo.spans_pages(pos, len(view)):
-                now = os.pread(self._fd, 1 << 30, 0)
-                k = PAGE - pos % PAGE
-                cut.append((now[:pos] + bytes(view[:k]) + now[pos + k :], _redo.record_path(path).read_bytes()))
-            super()._pwrite(view, pos)
-
-    real = _superblock.SealedFile
-    _superblock.SealedFile = Cutting
-    try:
-        with HDF5Writer(path) as w:
-            ep = 3
-            while not cut:
-                w.write_episodes([synth(ep, 3, (24, 24))], next_seed=ep + 1)
-                ep += 1
-    finally:
-        _superblock.SealedFile = real
+    cut = cut_writes(path, first_only=True)
+    with HDF5Writer(path) as w:
+        ep = 3
+        while not cut:
+            w.write_episodes([synth(ep, 3, (24, 24))], next_seed=ep + 1)
+            ep += 1
     raw, record = cut[0]
     path.write_bytes(raw)
     _redo.record_path(path).write_bytes(record)
     return path, raw, record
 
 
-def test_the_dataset_reader_completes_a_cut_write_on_open(tmp_path, synth):
-    path, _, _ = _cut_dataset(tmp_path, synth)
+def test_the_dataset_reader_completes_a_cut_write_on_open(tmp_path, synth, cut_writes):
+    path, _, _ = _cut_dataset(tmp_path, synth, cut_writes)
     ds = HDF5Dataset(path)
     assert ds.num_episodes >= 3
     np.testing.assert_array_equal(ds.get_col_data(keys.STATE)[:3], synth(0, 3, (24, 24))[keys.STATE])
@@ -165,8 +151,8 @@ def test_the_dataset_reader_completes_a_cut_write_on_open(tmp_path, synth):
         assert f[keys.EP_LEN][:3].tolist() == [3, 3, 3]
 
 
-def test_a_resuming_writer_completes_a_cut_write(tmp_path, synth):
-    path, _, _ = _cut_dataset(tmp_path, synth)
+def test_a_resuming_writer_completes_a_cut_write(tmp_path, synth, cut_writes):
+    path, _, _ = _cut_dataset(tmp_path, synth, cut_writes)
     with HDF5Writer(path) as w:
         n = w.num_episodes
         w.write_episodes([synth(n, 2, (24, 24))])
@@ -174,17 +160,17 @@ def test_a_resuming_writer_completes_a_cut_write(tmp_path, synth):
         assert f[keys.EP_LEN][:].tolist() == [3] * n + [2]
 
 
-def test_a_reader_leaves_the_record_of_a_live_writer_alone(tmp_path, synth):
+def test_a_reader_leaves_the_record_of_a_live_writer_alone(tmp_path, synth, cut_writes):
     """While a writer holds the file, its record describes a write it may still be making."""
-    path, raw, record = _cut_dataset(tmp_path, synth)
+    path, raw, record = _cut_dataset(tmp_path, synth, cut_writes)
     with WriterLock(path):
         assert repair(path) is False
     assert path.read_bytes() == raw and _redo.record_path(path).read_bytes() == record
     assert repair(path) is True
 
 
-def test_a_new_file_drops_the_record_of_a_file_once_at_its_path(tmp_path, synth):
-    path, _, _ = _cut_dataset(tmp_path, synth)
+def test_a_new_file_drops_the_record_of_a_file_once_at_its_path(tmp_path, synth, cut_writes):
+    path, _, _ = _cut_dataset(tmp_path, synth, cut_writes)
     with HDF5Writer(path, mode="overwrite") as w:
         assert not _redo.record_path(path).exists()
         w.write_episodes([synth(0, 2, (24, 24))])

@@ -312,39 +312,29 @@ def _opens_with_committed(path, synth) -> int | None:
         return None
 
 
-def test_a_write_a_kill_cuts_at_a_page_boundary_is_completed_on_open(tmp_path, monkeypatch, synth):
+def test_a_write_a_kill_cuts_at_a_page_boundary_is_completed_on_open(tmp_path, cut_writes, synth):
     """A kill during a ``pwrite`` of several pages stops the kernel's copy at a page boundary: the
     file keeps the write's first pages and its old bytes after. HDF5 rewrites metadata in place
     (object headers, chunk-index blocks), so such a state may not open; every one, once its redo
     record is applied (``repair``, as readers and writers do on open), opens with every episode."""
     path = tmp_path / "cut.h5"
-    states = []  # (file bytes, redo record bytes, episodes committed when the call returned)
-
-    class Recording(_superblock.SealedFile):
-        def _pwrite(self, view, pos):
-            if path.exists() and pos < self._written and _redo.spans_pages(pos, len(view)):
-                now = os.pread(self._fd, 1 << 30, 0)
-                record = _redo.record_path(path).read_bytes()
-                for cut in range(_redo.PAGE - pos % _redo.PAGE, len(view), _redo.PAGE):
-                    states.append((now[:pos] + bytes(view[:cut]) + now[pos + cut :], record, committed[0]))
-            super()._pwrite(view, pos)
-
-    monkeypatch.setattr(_superblock, "SealedFile", Recording)
-    committed = [0]
+    states = cut_writes(path)
+    done = []  # episodes committed when each state was recorded
     for session in (range(0, 30), range(30, 60)):  # create, then resume
         with HDF5Writer(path) as w:
             for ep in session:
                 w.write_episodes([synth(ep, _length(ep), IMAGE)], next_seed=ep + 1)
-                committed[0] += 1
+                done += [ep] * (len(states) - len(done))
+        done += [session[-1] + 1] * (len(states) - len(done))
         assert not _redo.record_path(path).exists()  # a closed writer leaves no record
     copy = tmp_path / "state.h5"
     unopenable = 0
-    for i, (raw, record, done) in enumerate(states):
+    for i, ((raw, record), committed) in enumerate(zip(states, done, strict=True)):
         copy.write_bytes(raw)
         unopenable += _opens_with_committed(copy, synth) is None
         _redo.record_path(copy).write_bytes(record)
         assert repair(copy), f"state {i}"
-        assert (_opens_with_committed(copy, synth) or 0) >= done, f"state {i}"
+        assert (_opens_with_committed(copy, synth) or 0) >= committed, f"state {i}"
         assert not _redo.record_path(copy).exists()
     assert len(states) > 20 and unopenable > 0  # the cuts are real damage, which the record mends
 
