@@ -26,6 +26,7 @@ from stable_worldmodel.solver import (
     make_solver,
     register_solver,
 )
+from stable_worldmodel.solver import base as solver_base
 
 FAST = {
     "cem": dict(num_samples=16, n_steps=3, topk=4),
@@ -218,6 +219,51 @@ def test_dtype_and_device_follow_the_model():
         configure(CEMSolver(Linear(device="meta"), **FAST["cem"]), n_envs=2)
     auto = CEMSolver(Linear(), device=None, **FAST["cem"])
     assert configure(auto, n_envs=2).device == torch.device("cpu")
+
+
+class Threads(Linear):
+    """Records torch's intra-op thread count while it scores; ``size`` parameters in all."""
+
+    def __init__(self, size=2):
+        super().__init__()
+        self.extra = torch.nn.Parameter(torch.zeros(size - 2))
+        self.threads = set()
+
+    def get_cost(self, info, candidates):
+        self.threads.add(torch.get_num_threads())
+        return super().get_cost(info, candidates)
+
+
+@pytest.mark.parametrize(
+    "policy, size, limit, expected",
+    [
+        ("PASSIVE", 2, None, 1),  # a small plan while OpenMP threads sleep between operations: one thread
+        ("passive", 2, None, 1),
+        ("ACTIVE", 2, None, 2),
+        (None, 2, None, 2),
+        ("PASSIVE", 1000, 64000, 2),  # 4 envs x 16 samples x horizon 1 x 1000 parameters: at the limit
+        ("PASSIVE", 1000, 64001, 1),
+    ],
+)
+def test_small_cpu_plans_run_on_one_thread_while_omp_threads_sleep(monkeypatch, policy, size, limit, expected):
+    if limit is not None:
+        monkeypatch.setattr(solver_base, "ONE_THREAD_WORK", limit)
+    if policy is None:
+        monkeypatch.delenv("OMP_WAIT_POLICY", raising=False)
+    else:
+        monkeypatch.setenv("OMP_WAIT_POLICY", policy)
+    before = torch.get_num_threads()
+    torch.set_num_threads(2)
+    try:
+        model = Threads(size)
+        solver = configure(CEMSolver(model, **FAST["cem"], seed=0), n_envs=4)
+        out = solver.solve({})
+        assert model.threads == {expected} and torch.get_num_threads() == 2  # restored after the plan
+        monkeypatch.setenv("OMP_WAIT_POLICY", "ACTIVE")
+        again = configure(CEMSolver(Threads(size), **FAST["cem"], seed=0), n_envs=4).solve({})
+        torch.testing.assert_close(out["actions"], again["actions"], rtol=0, atol=0)  # the same plans
+    finally:
+        torch.set_num_threads(before)
 
 
 def test_gradient_solver_leaves_model_grads_alone_and_works_under_no_grad():
