@@ -312,8 +312,8 @@ class BaseSolver:
         self._gen = torch.Generator(device=self.device)
         if self.device.type == "cpu":
             raise_trim_threshold()  # batched get_cost activations stay in the heap (see _heap.py)
-        model = self.model if isinstance(self.model, torch.nn.Module) else None
-        self._model_size = sum(p.numel() for p in model.parameters()) if model is not None else 0
+        module = isinstance(self.model, torch.nn.Module)
+        self._model_size = sum(p.numel() for p in self.model.parameters()) if module else 0  # see _threads_for
         self._auto_chunk = None
         low, high = self._bounds_arrays(action_space)
         self._low = torch.as_tensor(low, dtype=self.dtype, device=self.device)

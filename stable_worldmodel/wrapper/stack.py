@@ -79,17 +79,7 @@ class StackedWrapper(gym.Wrapper):
         return list(info) if self.keys is None else [k for k in self.keys if k in info]
 
     def _stack(self, info: dict, reset: bool) -> dict:
-        if self._span == 1:  # the common case, once per step for every key: kept lean
-            buffers = self.buffers
-            for k in self._selected(info):
-                value = info[k]
-                buf = buffers.get(k)
-                if buf is None:
-                    buffers[k] = deque([value], maxlen=1)
-                else:
-                    buf.append(value)
-                info[k] = value[None] if type(value) is np.ndarray else self._stack_one(value)
-            return info
+        one = self._span == 1  # the common case, once per step for every key: arrays get their axis inline
         for k in self._selected(info):
             value = info[k]
             buf = self.buffers.get(k)
@@ -97,7 +87,7 @@ class StackedWrapper(gym.Wrapper):
                 self.buffers[k] = deque([value] * self._span, maxlen=self._span)
             else:
                 buf.append(value)
-            info[k] = self.get_buffer_data(k)
+            info[k] = value[None] if one and type(value) is np.ndarray else self.get_buffer_data(k)
         return info
 
     def reset(self, *, seed=None, options=None):
