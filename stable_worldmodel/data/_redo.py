@@ -24,6 +24,8 @@ import struct
 import zlib
 from pathlib import Path
 
+from ._superblock import pwrite_all
+
 MAGIC = b"SWMREDO1"
 PAGE = 4096  # the kernel cuts a write at page boundaries (folios are whole pages, or more)
 _HEAD = struct.Struct("<8sQQI")
@@ -85,7 +87,7 @@ class RedoLog:
         if self._fd is None:
             self._fd = os.open(self.path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
         self._region = None
-        _pwrite_all(self._fd, record, 0)
+        pwrite_all(self._fd, record, 0)
         self._region = (pos, pos + len(view))
 
     def _clear(self) -> None:
@@ -104,13 +106,6 @@ class RedoLog:
             os.close(fd)
 
 
-def _pwrite_all(fd: int, data: bytes, pos: int) -> None:
-    view = memoryview(data)
-    while view:
-        done = os.pwrite(fd, view, pos)
-        view, pos = view[done:], pos + done
-
-
 def complete(path: str | os.PathLike) -> bool:
     """Finish the write recorded beside ``path`` if the file holds a cut of it, and remove the
     record; True when bytes changed. The caller makes sure no writer has the file open."""
@@ -127,7 +122,7 @@ def complete(path: str | os.PathLike) -> bool:
             now = os.pread(fh.fileno(), len(new), pos)
             cut = any(now == new[:c] + old[c:] for c in _cuts(pos, len(new))) if len(now) == len(new) else False
             if cut and now != new:
-                _pwrite_all(fh.fileno(), new, pos)
+                pwrite_all(fh.fileno(), new, pos)
                 changed = True
     record.unlink(missing_ok=True)
     return changed

@@ -167,6 +167,14 @@ def repair(path: str | os.PathLike) -> bool:
     return (needs_repair(path) and seal(path)) or completed
 
 
+def pwrite_all(fd: int, data, pos: int) -> None:
+    """Write all of ``data`` (bytes-like) at ``pos`` of descriptor ``fd``, however many ``pwrite`` calls it takes."""
+    view = memoryview(data).cast("B")
+    while view:
+        done = os.pwrite(fd, view, pos)
+        view, pos = view[done:], pos + done
+
+
 def _redo_log(path: str | os.PathLike, fd: int):
     from ._redo import RedoLog
 
@@ -318,9 +326,7 @@ class SealedFile:
         self._live = False
 
     def _pwrite(self, view: memoryview, pos: int) -> None:
-        while view:
-            done = os.pwrite(self._fd, view, pos)
-            view, pos = view[done:], pos + done
+        pwrite_all(self._fd, view, pos)
 
     def _put(self, view: memoryview, pos: int) -> None:
         """Write HDF5's bytes; one landing on bytes already written is recorded first, in case a
