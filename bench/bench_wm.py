@@ -3,7 +3,7 @@ with the same weights.
 
     python bench/bench_wm.py [--peer ../peer011-venv/bin/python] [--model tiny-vit|tiny-vit-h3|paper] [--envs 1,10]
                              [--samples 300] [--iterations 30] [--horizon 5] [--repeats 3] [--threads 2]
-                             [--device cpu|cuda] [--precision 32|bf16]
+                             [--device cpu|cuda] [--precision 32|bf16] [--compile]
 
 One LeWM is built and saved by ours (``save_pretrained``: weights.pt + config.json); the peer
 interpreter (upstream 0.1.1, built by ``../shared/bench/setup_peer011_venv.sh``) rebuilds the same
@@ -141,12 +141,15 @@ def model_info(b, seed):
     return expand(info, s) if side == "peer" else {k: info[k] for k in ("pixels", "goal")}
 
 
+compiled = side == "ours" and args.get("compile")  # ours through torch.compile (the first call compiles)
+get_cost = torch.compile(model.get_cost, dynamic=False) if compiled else model.get_cost
+
 # 1. equal results: the cost of one fixed batch of candidates (one env: upstream's LeWM.get_cost
 #    broadcasts its goal embedding wrongly for more than one env, so its CEM plans env by env)
 g = torch.Generator().manual_seed(7)
 cand = torch.randn(1, s, h, adim * block, generator=g).to(device)
 with torch.inference_mode():
-    out["cost"] = model.get_cost(model_info(1, 0), cand.clone()).cpu().tolist()
+    out["cost"] = get_cost(model_info(1, 0), cand.clone()).cpu().tolist()
 
 
 def median_time(fn, repeats):
@@ -171,7 +174,7 @@ for b in args["envs"]:
             if side == "ours":  # all envs in one batch
                 info = model_info(b, 1)
                 for c in cands:
-                    model.get_cost(info, c)
+                    get_cost(info, c)
             else:  # env by env, as upstream's CEMSolver(batch_size=1) does
                 for e in range(b):
                     info = model_info(1, 1 + e)
@@ -187,6 +190,8 @@ for b in args["envs"]:
         from stable_worldmodel.policy import PlanConfig
         from stable_worldmodel.solver import make_solver
         solver = make_solver("cem", model, num_samples=s, n_steps=iters, topk=30, device=str(device), seed=0)
+        if compiled:
+            solver.compile_cost()
     else:
         from stable_worldmodel.policy import PlanConfig
         from stable_worldmodel.solver.cem import CEMSolver
@@ -217,11 +222,13 @@ if args["train_batch"]:
     autocast = (torch.autocast(device.type, dtype=torch.bfloat16) if args.get("precision") == "bf16"
                 else contextlib.nullcontext())
 
+    loss_of = (torch.compile(model.loss) if compiled else model.loss) if side == "ours" else None
+
     def step(batch):
         px, act = batch
         with autocast:
             if side == "ours":
-                loss = model.loss({"pixels": px, "action": act})["loss"]
+                loss = loss_of({"pixels": px, "action": act})["loss"]
             else:
                 info = model.encode({"pixels": px, "action": act})
                 emb, act_emb = info["emb"], info["act_emb"]
@@ -272,6 +279,12 @@ def main() -> int:
     parser.add_argument("--train-steps", type=int, default=10)
     parser.add_argument("--device", default="cpu", help="cpu or cuda (both sides)")
     parser.add_argument("--precision", choices=("32", "bf16"), default="32", help="training autocast (both sides)")
+    parser.add_argument(
+        "--compile",
+        action="store_true",
+        help="ours through torch.compile: get_cost, the solver (compile_cost) and the training loss (the warm-up "
+        "calls compile, they are not timed)",
+    )
     args = parser.parse_args()
 
     sys.path.insert(0, str(HERE.parent))
@@ -304,11 +317,13 @@ def main() -> int:
             "num_proj": getattr(config, "sigreg_num_proj", 1024),
             "device": args.device,
             "precision": args.precision,
+            "compile": args.compile,
         }
         print(
             f"LeWM '{args.model}' ({config.image_size}px, embed {config.embed_dim}, predictor depth {config.depth}), "
             f"CEM {args.samples} x {args.iterations}, horizon {args.horizon} x frameskip {args.frameskip}, "
-            f"{args.threads} threads, {args.device}, training precision {args.precision}",
+            f"{args.threads} threads, {args.device}, training precision {args.precision}"
+            + (", ours through torch.compile" if args.compile else ""),
             flush=True,
         )
         ours = run_side(sys.executable, "ours", params)

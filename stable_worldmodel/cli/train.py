@@ -40,6 +40,7 @@ FLAGS = {
     "lr": "--lr",
     "device": "--device",
     "precision": "--precision",
+    "compile": "--compile",
     "name": "--name",
     "seed": "--seed",
     "resume": "--resume",
@@ -322,6 +323,13 @@ def train_cmd(
     ] = None,
     device: Annotated[str, typer.Option("--device", metavar="DEV", help="auto, cpu, cuda, cuda:N or mps.")] = "auto",
     precision: Annotated[str, typer.Option("--precision", metavar="P", help="32, bf16 or 16 (16 needs CUDA).")] = "32",
+    compile_loss: Annotated[
+        bool,
+        typer.Option(
+            "--compile",
+            help="Run the training step through torch.compile (compiled on the first step: worth it for long runs).",
+        ),
+    ] = False,
     name: Annotated[
         str | None,
         typer.Option(
@@ -536,6 +544,7 @@ def train_cmd(
         "lr": lr,
         "device": device,
         "precision": precision,
+        "compile": compile_loss,
         "name": name,
         "seed": seed,
         "resume": resume,
@@ -584,7 +593,7 @@ def train_cmd(
             raise typer.BadParameter("logs its own collections' success: drop --eval-every", param_hint="--online")
         flags.pop("eval_episodes"), flags.pop("eval_env"), flags.pop("eval_protocol")
         overrides.setdefault("progress", sys.stderr.isatty())
-        for key in ("epochs", "precision"):
+        for key in ("epochs", "precision", "compile"):
             flags.pop(key)
         result = train_online(
             model,

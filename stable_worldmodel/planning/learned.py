@@ -46,7 +46,11 @@ class PlanSettings:
     on upstream's TwoRoom with LeWM tiny: 12 steps 96%, 25 steps 92%, always waypoints 98%).
     It needs what the graph needs (LeWM, PLDM, Dreamer or a PreJEPA without proprio, trained by
     ``swm train`` on a dataset still on disk) and is ``"none"`` elsewhere; the protocol that
-    :func:`world_model_policy` returns records which."""
+    :func:`world_model_policy` returns records which.
+
+    ``compile=True`` scores candidates through ``torch.compile`` of the model's ``get_cost``
+    (:meth:`~stable_worldmodel.solver.base.BaseSolver.compile_cost`): the first plan compiles (tens of
+    seconds on a CPU), every later one runs faster, with the same costs up to float rounding."""
 
     solver: str = "cem"
     horizon: int = 5
@@ -59,6 +63,7 @@ class PlanSettings:
     subgoals: str | None = "auto"
     lookahead: int | None = None
     patience: int | None = None
+    compile: bool = False
     extra: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
@@ -87,6 +92,8 @@ class PlanSettings:
             value = getattr(self, name)
             if value is not None and (isinstance(value, bool) or not isinstance(value, int) or value < 1):
                 raise ConfigError(f"PlanSettings requires {name} to be a positive int, got {value!r}")
+        if not isinstance(self.compile, bool):
+            raise ConfigError(f"PlanSettings requires compile to be True or False, got {self.compile!r}")
 
     @property
     def waypoint_blocks(self) -> int:
@@ -108,6 +115,7 @@ class PlanSettings:
             "subgoals": self.subgoals or "none",
             **({"lookahead": self.waypoint_blocks} if self.subgoals not in (None, "none") else {}),
             **({"patience": self.patience} if self.subgoals == "auto" and self.patience else {}),
+            **({"compile": True} if self.compile else {}),
             **self.extra,
         }
 
@@ -119,7 +127,8 @@ def _make_solver(model: Any, settings: PlanSettings, device: Any) -> Any:
 
     cls = get_solver_class(settings.solver)
     kwargs = cls.knobs.kwargs(settings.samples, settings.iterations, settings.topk)
-    return cls(model, device=device, seed=settings.seed, **kwargs)
+    solver = cls(model, device=device, seed=settings.seed, **kwargs)
+    return solver.compile_cost() if settings.compile else solver
 
 
 def world_model_policy(

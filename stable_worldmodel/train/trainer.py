@@ -3,10 +3,11 @@
 AdamW with per-module parameter groups (no weight decay on biases, norms and embeddings;
 the encoder's learning rate scaled by ``encoder_lr_scale``), linear warmup then cosine
 decay, gradient clipping, autocast (bf16 / fp16 with a grad scaler) where the device
-supports it, validation loss, an embedding-collapse monitor (per-dim std of the
-embeddings), periodic checkpoints plus the last one, and exact resume: model, optimizer,
-scheduler, scaler, every RNG and the step are restored, so a resumed run equals an
-uninterrupted one. Under ``torchrun`` the step runs data-parallel (:mod:`.distributed`).
+supports it, ``torch.compile`` of the loss on request, validation loss, an
+embedding-collapse monitor (per-dim std of the embeddings), periodic checkpoints plus the
+last one, and exact resume: model, optimizer, scheduler, scaler, every RNG and the step are
+restored, so a resumed run equals an uninterrupted one. Under ``torchrun`` the step runs
+data-parallel (:mod:`.distributed`).
 """
 
 from __future__ import annotations
@@ -182,6 +183,7 @@ class Trainer:
         run: str,
         device: torch.device,
         precision: str = "32",
+        compile: bool = False,
         seed: int = 0,
         steps: int,
         log_every: int = 10,
@@ -195,6 +197,8 @@ class Trainer:
     ):
         if precision not in PRECISIONS:
             raise ConfigError(f"Training requires precision in {PRECISIONS}, got {precision!r}")
+        if not isinstance(compile, bool):
+            raise ConfigError(f"Training requires compile to be True or False, got {compile!r}")
         if precision == "16" and device.type != "cuda":
             raise ConfigError(f"Training requires a CUDA device for precision 16, got {device}; use bf16 or 32")
         self.model, self.data, self.cfg = model.to(device), data, cfg
@@ -212,6 +216,10 @@ class Trainer:
         self.generator = torch.Generator().manual_seed(seed)
         self.dist = dist or DistInfo()
         self.ddp = None
+        # the training step's forward and backward through torch.compile (compiled on the first step; the
+        # validation loss and the saved weights are the model's own)
+        self.compile = compile
+        self._loss = torch.compile(self.model.loss) if self.compile else self.model.loss
         if self.dist.enabled:
             from torch.nn.parallel import DistributedDataParallel
 
@@ -219,6 +227,8 @@ class Trainer:
             self.ddp = DistributedDataParallel(
                 _Loss(self.model), device_ids=[device] if device.type == "cuda" else None
             )
+            if self.compile:
+                self.ddp = torch.compile(self.ddp)
         self.step = 0
         #: called with the trainer before each training step (online training collects there)
         self.before_step: Any = None
@@ -386,7 +396,7 @@ class Trainer:
         if self.ddp is None:
             batch = self._next_batch(bs)
             with self._autocast():
-                return self.model.loss(batch)
+                return self._loss(batch)
         index = self.dist.shard(self.data.train_pick(self.generator, bs))  # same global pick everywhere
         # goals (goal-conditioned models) from a per-step, per-process stream: the shared pick stream stays in step
         goals = torch.Generator().manual_seed((self.seed * 1_000_003 + self.step) * 4099 + self.dist.rank)

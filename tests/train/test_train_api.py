@@ -96,6 +96,35 @@ def test_loss_falls(fit, model):
 
 
 @pytest.mark.parametrize(
+    "backend",
+    [
+        # forward and backward graphs captured and run by torch's own kernels: the compile path without
+        # inductor's code generation (a few seconds)
+        "aot_eager",
+        pytest.param("inductor", marks=pytest.mark.slow),  # what compile=True runs (~30 s on a 2-core CPU)
+    ],
+)
+def test_compiled_training_step_learns_and_is_recorded(fit, monkeypatch, backend):
+    compiled = []
+    real_compile = torch.compile
+
+    def recording_compile(fn, **options):
+        compiled.append(fn)
+        return real_compile(fn, **{"backend": backend, **options})
+
+    monkeypatch.setattr(torch, "compile", recording_compile)
+    result = fit("lewm", "compiled", steps=40, lr=3e-3, log_every=5, val_every=0, ckpt_every=0, compile=True)
+    assert [getattr(fn, "__name__", None) for fn in compiled] == ["loss"]  # the model's loss, once
+    losses = [loss for _, loss in train_losses(result.folder)]
+    assert len(losses) == 8 and all(math.isfinite(v) for v in losses)
+    assert np.mean(losses[-2:]) < 0.85 * np.mean(losses[:2]), f"did not learn: {losses}"
+    protocol = json.loads((result.folder / "protocol.json").read_text())
+    assert protocol["compile"] is True
+    # the saved weights are the model's own (no torch.compile wrapper in their names)
+    assert not any("_orig_mod" in k for k in weights(result.folder / "weights.pt"))
+
+
+@pytest.mark.parametrize(
     ("model", "every", "crash", "logged"),
     [
         # dropout and SIGReg's random directions draw from the global RNG: resume must restore it
@@ -346,6 +375,7 @@ def test_images_with_other_channels_than_the_model(refused):
     [
         (dict(precision="fp32"), r"precision in \('32', 'bf16', '16'\), got 'fp32'"),
         (dict(precision="16"), r"CUDA device for precision 16, got cpu; use bf16 or 32"),
+        (dict(compile="yes"), r"compile to be True or False, got 'yes'"),
         (dict(device="gpu"), r"device among auto, cpu, cuda, cuda:N, mps, got 'gpu'"),
         (dict(steps=0), r"steps to be an integer >= 1, got 0"),
         (dict(batch_size=True), r"batch_size to be an integer >= 1, got True"),
