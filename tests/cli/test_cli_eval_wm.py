@@ -330,10 +330,30 @@ def test_auto_subgoals_plan_on_the_goal_alone_without_the_training_dataset(swm, 
     assert plan["subgoals"] == "none" and "patience" not in plan and "lookahead" not in plan
 
 
-def test_subgoals_need_a_wm_policy(swm, error_line):
-    result = swm("eval", TOY, "--policy", "random", "--episodes", "1", "--subgoals", "graph")
+@pytest.mark.parametrize("option", [("--subgoals", "graph"), ("--compile",)], ids=["subgoals", "compile"])
+def test_planner_options_need_a_wm_policy(swm, option):
+    result = swm("eval", TOY, "--policy", "random", "--episodes", "1", *option)
     assert result.exit_code != 0
     assert "wm:RUN policies only" in result.output
+
+
+def test_eval_compile_plans_through_a_compiled_cost(swm, home, tmp_path, monkeypatch):
+    import torch
+
+    traced = []
+    real_compile = torch.compile
+
+    def recording_compile(fn, **options):  # torch's own kernels run the captured graphs: no code generation
+        traced.append(fn.__name__)
+        return real_compile(fn, **{**options, "backend": "aot_eager"})
+
+    monkeypatch.setattr(torch, "compile", recording_compile)
+    out = tmp_path / "out.json"
+    args = ("eval", TOY, "--policy", f"wm:{RUN}", "--episodes", "2", "--num-envs", "2", "--max-steps", "4")
+    result = swm(*args, *PLAN, *SMALL, "--compile", "--json", str(out))
+    assert result.exit_code == 0, result.output
+    assert traced == ["get_cost"]
+    assert json.loads(out.read_text())["plan"]["compile"] is True
 
 
 # -- dataset_starts: the (episode, start) pairs of --from-dataset --------------------------------

@@ -117,6 +117,22 @@ def test_set_overrides_config_fields(swm, toy, _stablewm_home):
     assert config["warmup_steps"] == 12 and list(config["image_mean"]) == [0.4, 0.4, 0.4]
 
 
+@pytest.mark.parametrize("flag", [("--compile",), ("--set", "compile=true")], ids=["flag", "set"])
+def test_compile_flag_compiles_the_training_loss(swm, toy, _stablewm_home, monkeypatch, flag):
+    traced = []
+    real_compile = torch.compile
+
+    def recording_compile(fn, **options):  # torch's own kernels run the captured graphs: no code generation
+        traced.append(fn.__name__)
+        return real_compile(fn, **{**options, "backend": "aot_eager"})
+
+    monkeypatch.setattr(torch, "compile", recording_compile)
+    result = swm("train", "dummy", "--dataset", toy, "--steps", "2", "--name", "r", *QUICK, *flag)
+    assert result.exit_code == 0, result.output
+    assert traced == ["loss"]
+    assert json.loads((_stablewm_home / "checkpoints" / "r" / "protocol.json").read_text())["compile"] is True
+
+
 def test_unknown_model_is_one_line_naming_the_close_one(swm, toy, error_line, _stablewm_home):
     result = swm("train", "lewn", "--dataset", toy)
     assert result.exit_code == 1
