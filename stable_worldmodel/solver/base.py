@@ -84,6 +84,9 @@ _DEVICE_FORMS = '"cpu", "cuda", "cuda:0", "mps", a torch.device, or None (follow
 #: horizon 5 (1.8e9) on 2 cores: 650 -> 360 ms per plan (390 -> 360 beside a busy process); at 4 envs
 #: (7.2e9) one thread and two are even, at 10 envs two are 1.34x faster.
 ONE_THREAD_WORK = 6e9
+#: the least ``torch._dynamo.config.recompile_limit`` that :meth:`BaseSolver.compile_cost` sets: compiled
+#: ``get_cost`` graphs kept per model class (one or two per model instance and input shape)
+COMPILED_GRAPHS = 64
 
 
 def _sleeping_omp_threads() -> bool:
@@ -501,7 +504,16 @@ class BaseSolver:
         that encodes the context on a plan's first call, one for the calls that reuse it), later plans run
         the compiled code: the model's elementwise operations fused around its matrix products, with less
         Python per call. The costs equal the eager ones up to float rounding (a LeWM's within 1e-6). It pays
-        when a run plans many times (``swm eval`` over many episodes); ``swm eval --compile`` turns it on."""
+        when a run plans many times (``swm eval`` over many episodes); ``swm eval --compile`` turns it on.
+
+        Compiled graphs are kept per ``get_cost`` code: each model instance and input shape adds its own, and
+        torch falls back to eager code past ``torch._dynamo.config.recompile_limit`` (8 by default) of them;
+        this raises that limit to at least :data:`COMPILED_GRAPHS` (a sweep planning with several checkpoints
+        of one model class in one process)."""
+        import torch._dynamo
+
+        config = torch._dynamo.config
+        config.recompile_limit = max(config.recompile_limit, COMPILED_GRAPHS)
         self._cost_fn = torch.compile(self.model.get_cost, dynamic=False, **options)
         return self
 

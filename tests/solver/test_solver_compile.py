@@ -5,12 +5,14 @@ from __future__ import annotations
 import gymnasium as gym
 import pytest
 import torch
+import torch._dynamo
 
 from stable_worldmodel import wm
 from stable_worldmodel.errors import ConfigError
 from stable_worldmodel.planning.learned import PlanSettings, _make_solver
 from stable_worldmodel.policy import PlanConfig
 from stable_worldmodel.solver import make_solver
+from stable_worldmodel.solver.base import COMPILED_GRAPHS
 
 #: a width-8 CNN LeWM at 16x16, one predictor layer
 TINY = dict(
@@ -71,7 +73,9 @@ def test_compile_cost_traces_get_cost_with_the_options_given():
         return gm.forward
 
     solver = configured(model)
-    assert solver.compile_cost(backend=recording_backend) is solver
+    with torch._dynamo.config.patch(recompile_limit=8):
+        assert solver.compile_cost(backend=recording_backend) is solver
+        assert torch._dynamo.config.recompile_limit == COMPILED_GRAPHS  # several models / shapes stay compiled
     solver.solve(plan_info())
     # one graph encodes the context on the plan's first call, one reuses it; no further graph per call
     assert 1 <= len(graphs) <= 2
