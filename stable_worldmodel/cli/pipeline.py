@@ -383,7 +383,7 @@ def eval_cmd(
             "--compile",
             help=(
                 "wm: policies score candidates through torch.compile of the model's cost: the first plan compiles "
-                "(tens of seconds on a CPU), later plans run faster (a LeWM on a CPU: about 1.35x per plan)."
+                "(tens of seconds on a CPU), later plans run faster (a LeWM on a 2-core CPU: 1.2-1.5x per plan)."
             ),
         ),
     ] = False,

@@ -503,7 +503,7 @@ class BaseSolver:
         The first plan compiles ``get_cost`` once per shape of its inputs (tens of seconds on a CPU: one graph
         that encodes the context on a plan's first call, one for the calls that reuse it), later plans run
         the compiled code: the model's elementwise operations fused around its matrix products, with less
-        Python per call. The costs equal the eager ones up to float rounding (a LeWM's within 1e-6). It pays
+        Python per call. The costs equal the eager ones up to float rounding (a LeWM's within 1e-5). It pays
         when a run plans many times (``swm eval`` over many episodes); ``swm eval --compile`` turns it on.
 
         Compiled graphs are kept per ``get_cost`` code: each model instance and input shape adds its own, and
