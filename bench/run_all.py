@@ -18,6 +18,7 @@ SCRIPTS = [
     ("bench_solvers.py", []),
     ("bench_expert_success.py", []),
     ("bench_wm.py", []),  # ours vs upstream 0.1.1 when ../peer011-venv exists
+    ("bench_compile.py", ["--envs", "1", "--rounds", "3"]),  # torch.compile against eager
     ("bench_presets.py", ["--presets", "tiny,small", "--steps", "3"]),
     ("bench_ray.py", []),
     ("bench_mujoco.py", []),  # ours vs upstream 0.1.1 when ../peer011-venv exists
