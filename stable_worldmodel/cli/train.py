@@ -593,8 +593,12 @@ def train_cmd(
             raise typer.BadParameter("logs its own collections' success: drop --eval-every", param_hint="--online")
         flags.pop("eval_episodes"), flags.pop("eval_env"), flags.pop("eval_protocol")
         overrides.setdefault("progress", sys.stderr.isatty())
-        for key in ("epochs", "precision", "compile"):
-            flags.pop(key)
+        precision, compile_loss = flags.pop("precision"), flags.pop("compile")
+        if precision != "32" or compile_loss:
+            raise typer.BadParameter(
+                "trains online in eager fp32: drop --precision and --compile", param_hint="--online"
+            )
+        flags.pop("epochs")
         result = train_online(
             model,
             online,

@@ -85,6 +85,9 @@ def test_swm_train_online_and_its_errors(swm, error_line, _stablewm_home):
     assert (_stablewm_home / "checkpoints" / "Toy-v0-tdmpc2-online" / "replay.h5").is_file()
     both = swm("train", "tdmpc2", "--online", TOY, "--dataset", "x")
     assert both.exit_code == 2 and "--online takes no --dataset or --epochs" in both.output
+    for extra in (("--compile",), ("--precision", "bf16")):  # refused, not silently dropped
+        eager = swm("train", "tdmpc2", "--online", TOY, "--steps", "2", *extra)
+        assert eager.exit_code == 2 and "trains online in eager fp32: drop --precision and --compile" in eager.output
     planner = swm("train", "lewm", "--online", TOY, "--steps", "2", "--seed-episodes", "2", "--max-steps", "8")
     assert planner.exit_code == 1 and "requires a model with an actor (get_action), got 'lewm'" in error_line(planner)
 
