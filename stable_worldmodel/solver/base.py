@@ -500,8 +500,8 @@ class BaseSolver:
     def compile_cost(self, **options: Any) -> BaseSolver:
         """Score candidates through ``torch.compile(model.get_cost, dynamic=False, **options)``; returns the solver.
 
-        The first plan compiles ``get_cost`` once per shape of its inputs (tens of seconds on a CPU: one graph
-        that encodes the context on a plan's first call, one for the calls that reuse it), later plans run
+        The first plan compiles ``get_cost`` once per shape of its inputs (tens of seconds on a CPU; for a LeWM
+        one graph that encodes the context on a plan's first call, one for the calls that reuse it), later plans run
         the compiled code: the model's elementwise operations fused around its matrix products, with less
         Python per call. The costs equal the eager ones up to float rounding (a LeWM's within 1e-5). It pays
         when a run plans many times (``swm eval`` over many episodes); ``swm eval --compile`` turns it on.
