@@ -36,7 +36,6 @@ def main() -> int:
     parser.add_argument("--samples", type=int, default=300)
     parser.add_argument("--iterations", type=int, default=30)
     parser.add_argument("--horizon", type=int, default=5)
-    parser.add_argument("--frameskip", type=int, default=5)
     parser.add_argument("--train-batch", type=int, default=64, help="0 skips training")
     parser.add_argument("--train-steps", type=int, default=5, help="timed steps per round")
     parser.add_argument("--precision", choices=("32", "bf16"), default="32", help="training autocast")
@@ -56,12 +55,12 @@ def main() -> int:
     torch.set_num_threads(args.threads)
     preset, overrides = MODELS[args.model]
     config = wm.get_config("lewm", preset, **overrides)
-    adim, size, hist = 2, config.image_size, config.history_size
+    adim, size, hist, block = 2, config.image_size, config.history_size, config.frameskip
     torch.manual_seed(0)
     model = wm.make("lewm", preset, action_dim=adim, **overrides).eval()
     print(
         f"LeWM '{args.model}' ({size}px), CEM {args.samples} x {args.iterations}, horizon {args.horizon} x frameskip "
-        f"{args.frameskip}, {args.threads} threads, OMP_WAIT_POLICY={os.environ['OMP_WAIT_POLICY']}, "
+        f"{block}, {args.threads} threads, OMP_WAIT_POLICY={os.environ['OMP_WAIT_POLICY']}, "
         f"torch {torch.__version__}",
         flush=True,
     )
@@ -87,12 +86,12 @@ def main() -> int:
                     horizon=args.horizon,
                     receding_horizon=args.horizon,
                     history_len=hist,
-                    action_block=args.frameskip,
+                    action_block=block,
                 ),
             )
             solvers.append(solver)
         info = infos(b)
-        cand = torch.randn(b, args.samples, args.horizon, adim * args.frameskip, generator=g)
+        cand = torch.randn(b, args.samples, args.horizon, adim * block, generator=g)
         with torch.inference_mode():
             costs = [s._cost(s._expand({k: v.clone() for k, v in info.items()}, args.samples), cand) for s in solvers]
         diff = (costs[0] - costs[1]).abs().max().item()
@@ -115,7 +114,7 @@ def main() -> int:
         model.train()
         bt, t = args.train_batch, hist + 1
         batches = [
-            {"pixels": torch.randn(bt, t, 3, size, size, generator=g), "action": torch.randn(bt, t, adim * 5)}
+            {"pixels": torch.randn(bt, t, 3, size, size, generator=g), "action": torch.randn(bt, t, adim * block)}
             for _ in range(args.train_steps)
         ]
         autocast = (
