@@ -68,3 +68,29 @@ def one_torch_thread():
     torch.set_num_threads(1)
     yield
     torch.set_num_threads(threads)
+
+
+class CompileRecorder:
+    """What :func:`compile_recorder` saw: the ``__name__`` of each function given to ``torch.compile``; ``backend``
+    runs the captured graphs (``aot_eager``: torch's own kernels, no code generation; ``inductor``: what
+    ``torch.compile`` runs by default)."""
+
+    def __init__(self) -> None:
+        self.names: list[str] = []
+        self.backend = "aot_eager"
+
+
+@pytest.fixture
+def compile_recorder(monkeypatch) -> CompileRecorder:
+    """``torch.compile`` patched to record what it compiles and to use the recorder's ``backend``."""
+    import torch
+
+    recorder = CompileRecorder()
+    real_compile = torch.compile
+
+    def recording_compile(fn, **options):
+        recorder.names.append(fn.__name__)
+        return real_compile(fn, **{**options, "backend": recorder.backend})
+
+    monkeypatch.setattr(torch, "compile", recording_compile)
+    return recorder
