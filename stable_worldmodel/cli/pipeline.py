@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -630,19 +631,19 @@ def eval_cmd(
         out.print(f"Results: {json_path}", soft_wrap=True)
 
 
-def _factor_count(env_id: str) -> str:
+def _factor_count(env_id: str, counts: Any) -> str:
+    """The factor count column of ``swm envs``: ``counts.get(env_id)`` (``envs.factor_index.FactorCounts``), or why it
+    is not available."""
     from .._optional import missing_extra
     from ..envs import get_entry
-    from ..planning.policies import variation_space_of
 
     extra = missing_extra(get_entry(env_id).tags)
     if extra:
         return f'n/a: pip install "stable-worldmodel[{extra}]"'
     try:
-        space = variation_space_of(env_id)
+        return str(counts.get(env_id))
     except ImportError as exc:  # an optional extra or an env family that is not installed
         return f"n/a ({type(exc).__name__})"
-    return str(len(space.names())) if space is not None else "0"
 
 
 def envs(
@@ -657,6 +658,7 @@ def envs(
     from rich.table import Table
 
     from ..envs import get_entry, list_envs
+    from ..envs.factor_index import FactorCounts
     from .display import console
     from .errors import check_choice
 
@@ -665,9 +667,16 @@ def envs(
     table = Table(title="Environments")
     for column, justify in (("id", "left"), ("factors", "right"), ("tags", "left"), ("expert", "left")):
         table.add_column(column, justify=justify, style="cyan" if column == "id" else None, no_wrap=column == "id")
-    for env_id in list_envs(tag):
-        entry = get_entry(env_id)
-        table.add_row(env_id, _factor_count(env_id), ", ".join(entry.tags), "yes" if entry.expert else "no")
+    counts = FactorCounts()
+    ids = list_envs(tag)
+    building = sum(env_id not in counts.counts for env_id in ids)
+    status = f"Counting the factors of {building} env(s): each is built once, then the counts are cached"
+    with console().status(status) if building else contextlib.nullcontext():
+        for env_id in ids:
+            entry = get_entry(env_id)
+            factors = _factor_count(env_id, counts)
+            table.add_row(env_id, factors, ", ".join(entry.tags), "yes" if entry.expert else "no")
+    counts.save()
     console().print(table)
 
 
