@@ -215,6 +215,47 @@ def test_bc_coef_makes_the_prior_imitate_the_data():
         wm.get_config("tdmpc2", "tiny", bc_coef=-1.0)
 
 
+def test_loss_terms_equal_their_step_by_step_definition():
+    """The reward and Q heads score all steps in one call; the terms are still the per-step sums of the docstring."""
+    import torch.nn.functional as F
+
+    from stable_worldmodel.wm.tdmpc2.module import two_hot
+
+    model = make(num_preds=3, q_dropout=0.0).train()  # (the Q heads' dropout draws its masks per call)
+    with torch.no_grad():  # away from the zero-initialised heads, whose uniform logits hide mistakes
+        for p in model.parameters():
+            p.add_(0.3 * randn(*p.shape, seed=p.numel()))
+    data = batch(5, 4)
+    rho, discount = model.cfg["wm"]["rho"], model.cfg["wm"]["discount"]
+    torch.manual_seed(3)  # the draws loss() makes next, in its order (loss() then moves the target heads)
+    with torch.no_grad():
+        emb = model.encode_obs(model._inputs(data, "reference"))
+        target_z = emb[:, 1:]
+        next_action = model.sample_pi(target_z)[1]
+        pick = torch.randperm(NET["num_q"])[:2]
+        td_target = (
+            data[keys.REWARD][:, :3] + discount * model.q_values(target_z, next_action, target=True)[pick].min(0).values
+        )
+
+        def ce(logits, target):
+            return -(two_hot(target, 21, model.vmin, model.vmax) * F.log_softmax(logits, -1)).sum(-1).mean()
+
+        z, consistency, reward_loss, value_loss = emb[:, 0], 0.0, 0.0, 0.0
+        for t in range(3):
+            za = torch.cat([z, data[keys.ACTION][:, t]], -1)
+            value_loss += rho**t * sum(ce(q(za), td_target[:, t]) for q in model.qs)
+            reward_loss += rho**t * ce(model.reward(za), data[keys.REWARD][:, t])
+            z = model.dynamics(za)
+            consistency += rho**t * F.mse_loss(z, target_z[:, t])
+    torch.manual_seed(3)
+    out = model.loss(data)
+    assert 0 < rho < 1
+    assert_close(out["consistency_loss"], consistency / 3, atol=1e-6, rtol=1e-5)
+    assert_close(out["reward_loss"], reward_loss / 3, atol=1e-6, rtol=1e-5)
+    assert_close(out["value_loss"], value_loss / (3 * NET["num_q"]), atol=1e-6, rtol=1e-5)
+    assert out["value_loss"].item() > 0.1 and out["reward_loss"].item() > 0.1
+
+
 def test_loss_decreases():
     model = make().train()
     data = batch(8, 3)

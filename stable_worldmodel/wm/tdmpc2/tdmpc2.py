@@ -435,17 +435,23 @@ class TDMPC2(nn.Module):
             pick = torch.randperm(wm["num_q"], device=emb.device)[:2]
             next_q = self.q_values(target_z, next_action, target=True)[pick].min(0).values
             td_target = reward[:, :horizon] + wm["discount"] * next_q  # (B, H)
-        z, latents = emb[:, 0], []
-        consistency = reward_loss = value_loss = 0.0
+        # only the dynamics run step by step; the reward and Q heads then score every step's (z, action) at once
+        z, inputs = emb[:, 0], []
+        consistency = 0.0
         for t in range(horizon):
             za = torch.cat([z, action[:, t].to(z.dtype)], dim=-1)
-            weight = wm["rho"] ** t
-            value_loss = value_loss + weight * sum(self._two_hot_ce(q(za), td_target[:, t]).mean() for q in self.qs)
-            latents.append(z)
-            z, logits = self.dynamics(za), self.reward(za)
-            reward_loss = reward_loss + weight * self._two_hot_ce(logits, reward[:, t]).mean()
-            consistency = consistency + weight * F.mse_loss(z, target_z[:, t])
-        pi_loss = self._pi_loss(torch.stack(latents, dim=1).detach(), action[:, :horizon])
+            inputs.append(za)
+            z = self.dynamics(za)
+            consistency = consistency + wm["rho"] ** t * F.mse_loss(z, target_z[:, t])
+        za = torch.stack(inputs, dim=1)  # (B, H, L + A)
+        weights = wm["rho"] ** torch.arange(horizon, device=za.device, dtype=za.dtype)
+
+        def weighted(logits: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
+            return (self._two_hot_ce(logits, target).mean(0) * weights).sum()
+
+        reward_loss = weighted(self.reward(za), reward[:, :horizon])
+        value_loss = sum(weighted(q(za), td_target) for q in self.qs)
+        pi_loss = self._pi_loss(za[..., : emb.shape[-1]].detach(), action[:, :horizon])
         consistency, reward_loss = consistency / horizon, reward_loss / horizon
         value_loss = value_loss / (horizon * wm["num_q"])
         total = (
