@@ -549,6 +549,7 @@ def _train_locked(
             protocol["wandb"] = {k: log.wandb[k] for k in ("id", "project", "mode", "url")}
         result = trainer.fit(log)
         result.features = features
+        trainer.ddp = None  # DDP holds the process group: release it before leaving the group, not at exit
         distributed.cleanup(dist_info)
         return result
     except BaseException as exc:

@@ -53,6 +53,7 @@ with distributed.global_batch():
 loss.backward()
 if rank == 0:
     torch.save({n: p.grad for n, p in model.named_parameters() if p.grad is not None}, out)
+del ddp  # it holds the process group: release it before leaving the group, not at interpreter exit
 distributed.cleanup(info)
 """
 
