@@ -109,8 +109,12 @@ class ConvEncoder(nn.Module):
                 f"ConvEncoder requires images of shape (N, {self.config.num_channels}, {size}, {size}), "
                 f"got {tuple(pixels.shape)}; resize them to {size}x{size} (the model's image_size)"
             )
-        feat = self.convs(pixels.to(self.head.weight.dtype))
-        return EncoderOutput(self.head(feat.flatten(1)).unsqueeze(1))
+        x = pixels.to(self.head.weight.dtype)
+        if x.device.type == "cpu":
+            # oneDNN's convolutions and GroupNorm run faster on channels-last maps: the LeWM `cpu` preset's training
+            # step 1.18x on 2 threads, 1.08x on one (same loss; gradients within 4e-7). The weights stay as they are.
+            x = x.contiguous(memory_format=torch.channels_last)
+        return EncoderOutput(self.head(self.convs(x).flatten(1)).unsqueeze(1))
 
 
 class StateEncoder(nn.Module):

@@ -21,6 +21,25 @@ def test_conv_encoder_gives_one_token(size):
     assert enc.config.hidden_size == 8 and enc.config.image_size == size
 
 
+def test_conv_encoder_runs_channels_last_on_cpu_with_the_same_output_and_gradients():
+    torch.manual_seed(0)
+    enc = ConvEncoder(image_size=16, width=8, hidden_size=8)
+    seen = []
+    enc.convs[0].register_forward_pre_hook(
+        lambda _, args: seen.append(args[0].is_contiguous(memory_format=torch.channels_last))
+    )
+    x = torch.randn(4, 3, 16, 16)
+    out = enc(x).last_hidden_state
+    assert seen == [True]
+    ref = enc.head(enc.convs(x).flatten(1)).unsqueeze(1)  # the same layers on the usual NCHW layout
+    assert seen == [True, False]
+    assert torch.allclose(out, ref, atol=1e-6, rtol=1e-5)
+    grads = torch.autograd.grad(out.square().sum(), list(enc.parameters()))
+    ref_grads = torch.autograd.grad(ref.square().sum(), list(enc.parameters()))
+    assert all(torch.allclose(g, r, atol=1e-6, rtol=1e-4) for g, r in zip(grads, ref_grads, strict=True))
+    assert all(p.is_contiguous() for p in enc.parameters())  # checkpoints keep the usual layout
+
+
 def test_conv_encoder_names_the_expected_image_size():
     enc = ConvEncoder(image_size=16, width=8, hidden_size=8)
     with pytest.raises(SpaceError, match="16x16") as info:
