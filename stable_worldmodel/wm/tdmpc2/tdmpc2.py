@@ -444,10 +444,11 @@ class TDMPC2(nn.Module):
             z = self.dynamics(za)
             consistency = consistency + wm["rho"] ** t * F.mse_loss(z, target_z[:, t])
         za = torch.stack(inputs, dim=1)  # (B, H, L + A)
-        weights = wm["rho"] ** torch.arange(horizon, device=za.device, dtype=za.dtype)
+        steps = torch.arange(horizon, device=za.device)
 
         def weighted(logits: torch.Tensor, target: torch.Tensor) -> torch.Tensor:
-            return (self._two_hot_ce(logits, target).mean(0) * weights).sum()
+            per_step = self._two_hot_ce(logits, target).mean(0)  # (H,), float32 also under bf16 autocast
+            return (per_step * wm["rho"] ** steps.to(per_step.dtype)).sum()
 
         reward_loss = weighted(self.reward(za), reward[:, :horizon])
         value_loss = sum(weighted(q(za), td_target) for q in self.qs)
