@@ -8,22 +8,10 @@ import json
 import shutil
 
 import pytest
+from _nets import TINY_JEPA
 
 TOY = "swm/Toy-v0"
-TINY = dict(
-    image_size=16,
-    embed_dim=8,
-    cnn_width=8,
-    depth=1,
-    heads=2,
-    dim_head=4,
-    mlp_dim=16,
-    projector_hidden=16,
-    sigreg_num_proj=16,
-    batch_size=8,
-    frameskip=1,
-    history_size=1,
-)
+TINY = dict(TINY_JEPA, sigreg_num_proj=16, batch_size=8, history_size=1)
 
 
 @pytest.fixture(scope="module")

@@ -6,6 +6,7 @@ import gymnasium as gym
 import pytest
 import torch
 import torch._dynamo
+from _nets import TINY_JEPA
 
 from stable_worldmodel import wm
 from stable_worldmodel.errors import ConfigError
@@ -15,18 +16,7 @@ from stable_worldmodel.solver import make_solver
 from stable_worldmodel.solver.base import COMPILED_GRAPHS
 
 #: a width-8 CNN LeWM at 16x16, one predictor layer
-TINY = dict(
-    image_size=16,
-    embed_dim=8,
-    cnn_width=8,
-    depth=1,
-    heads=2,
-    dim_head=4,
-    mlp_dim=16,
-    projector_hidden=16,
-    history_size=1,
-    frameskip=1,
-)
+TINY = dict(TINY_JEPA, history_size=1)
 SAMPLES, HORIZON = 16, 3
 
 

@@ -7,6 +7,7 @@ import shutil
 
 import numpy as np
 import pytest
+from _nets import TINY_JEPA
 
 TOY = "swm/Toy-v0"
 #: name of the recorded dataset in every test's cache
@@ -14,19 +15,7 @@ DATASET = "toy"
 #: episodes of the recorded dataset (lengths 3 to 13 rows: the expert reaches the goal quickly)
 EPISODES = 10
 #: a width-8 CNN world model at 16x16 with one predictor layer (LeWM, PLDM)
-NET = dict(
-    image_size=16,
-    embed_dim=8,
-    cnn_width=8,
-    depth=1,
-    heads=2,
-    dim_head=4,
-    mlp_dim=16,
-    projector_hidden=16,
-    history_size=2,
-    frameskip=1,
-    warmup_steps=0,
-)
+NET = dict(TINY_JEPA, history_size=2, warmup_steps=0)
 #: what each model of the ``tiny`` preset needs on top of the preset to train in well under a second
 TINY = {
     "dummy": dict(image_size=16, frameskip=1, warmup_steps=0),

@@ -12,25 +12,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
+from _nets import TINY_JEPA
 
 from stable_worldmodel.errors import ConfigError
 from stable_worldmodel.train import distributed
 
 GLOBAL_BATCH = 8
 #: a width-8 CNN world model at 16x16 with one predictor layer
-NET = dict(
-    image_size=16,
-    embed_dim=8,
-    cnn_width=8,
-    depth=1,
-    heads=2,
-    dim_head=4,
-    mlp_dim=16,
-    projector_hidden=16,
-    history_size=2,
-    frameskip=1,
-    warmup_steps=0,
-)
+NET = dict(TINY_JEPA, history_size=2, warmup_steps=0)
 
 # One process of the gradient check: the same seeded model and global batch everywhere, this
 # process's slice through DDP inside global_batch(), gradients written by rank 0.

@@ -3,23 +3,13 @@
 from __future__ import annotations
 
 import torch
+from _nets import TINY_JEPA
 
 from stable_worldmodel import keys
 
 IMAGE = 16
 #: a width-8 CNN world model at 16x16 (``make(name, "tiny", action_dim=2, **TINY)``)
-TINY = dict(
-    image_size=IMAGE,
-    embed_dim=8,
-    cnn_width=8,
-    depth=1,
-    heads=2,
-    dim_head=4,
-    mlp_dim=16,
-    projector_hidden=16,
-    history_size=2,
-    frameskip=1,
-)
+TINY = dict(TINY_JEPA, image_size=IMAGE, history_size=2)
 #: the ViT variant of ``TINY`` (one layer of width 8, patch 8: 4 patches + CLS)
 VIT = dict(
     encoder="vit",
