@@ -657,6 +657,7 @@ def envs(
     """
     from rich.table import Table
 
+    from .._optional import missing_extra
     from ..envs import get_entry, list_envs
     from ..envs.factor_index import FactorCounts
     from .display import console
@@ -669,7 +670,8 @@ def envs(
         table.add_column(column, justify=justify, style="cyan" if column == "id" else None, no_wrap=column == "id")
     counts = FactorCounts()
     ids = list_envs(tag)
-    building = sum(env_id not in counts.counts for env_id in ids)
+    # envs whose extra is missing are never built (their row says which extra to install)
+    building = sum(env_id not in counts.counts and not missing_extra(get_entry(env_id).tags) for env_id in ids)
     status = f"Counting the factors of {building} env(s): each is built once, then the counts are cached"
     with console().status(status) if building else contextlib.nullcontext():
         for env_id in ids:
